@@ -1,0 +1,27 @@
+#pragma once
+/// File helpers shared by the readers and writers.
+
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <string>
+
+namespace csgvox {
+
+/// Checks that `path` names an existing, readable regular file.
+/// @throw IoError "<path>: no such file" / "is a directory" / "cannot be read".
+void requireReadableFile(const std::filesystem::path& path);
+
+/// Writes a file atomically: `write` fills a temporary file next to `path`,
+/// which replaces `path` only when `write` returns and the stream is good.
+/// On any failure the temporary file is removed and `path` is left untouched.
+/// @throw IoError when the file cannot be created or written; rethrows what
+///        `write` throws.
+void writeFileAtomically(const std::filesystem::path& path,
+                         const std::function<void(std::ostream&)>& write,
+                         bool binary = false);
+
+/// Lower-case extension of path without the dot ("ply", "xyz", ...).
+std::string lowerExtension(const std::filesystem::path& path);
+
+}  // namespace csgvox

@@ -1,0 +1,24 @@
+#pragma once
+/// tree.json: the csgvox tree format (documented in README.md, "File formats").
+
+#include "primitives/csg_tree.h"
+
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+
+namespace csgvox {
+
+/// Reads a tree from JSON text. `source` names the input in error messages.
+/// @throw ParseError "<source>: <problem>" for malformed JSON or an invalid tree.
+CsgTree readTreeJson(std::istream& in, const std::string& source = "<stream>");
+/// Reads a tree from a tree.json file.
+/// @throw IoError if the file cannot be read; ParseError if it is not a valid tree.
+CsgTree readTreeJson(const std::filesystem::path& path);
+
+/// Writes a tree as indented JSON; numbers round-trip exactly.
+void writeTreeJson(std::ostream& out, const CsgTree& tree);
+/// Writes a tree.json file atomically. @throw IoError.
+void writeTreeJson(const std::filesystem::path& path, const CsgTree& tree);
+
+}  // namespace csgvox

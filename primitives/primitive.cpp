@@ -1,0 +1,435 @@
+#include "primitives/primitive.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace csgvox {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Signed distance in the usual convention (negative inside) with gradient, in
+// the (rho, z) meridian half-plane of a solid of revolution.
+struct Sd2 {
+  double d;
+  double gRho;
+  double gZ;
+};
+
+// Cylindrical coordinates of p around an axis through `center`.
+struct Meridian {
+  double rho;    // distance from the axis
+  double z;      // signed coordinate along the axis
+  Vec3 radial;   // unit radial direction (arbitrary perpendicular on the axis)
+};
+
+Meridian toMeridian(const Vec3& p, const Vec3& center, const Vec3& axis) {
+  const Vec3 d = p - center;
+  const double z = d.dot(axis);
+  const Vec3 r = d - z * axis;
+  const double rho = r.norm();
+  Meridian m{rho, z, Vec3::Zero()};
+  if (rho > 1e-300) {
+    m.radial = r / rho;
+  } else {
+    m.radial = frameFromAxis(axis).col(0);
+  }
+  return m;
+}
+
+// Returns f = -sd and the 3D gradient of f.
+double fromMeridian(const Sd2& s, const Meridian& m, const Vec3& axis, Vec3& gradient) {
+  gradient = -(s.gRho * m.radial + s.gZ * axis);
+  return -s.d;
+}
+
+// Signed distance of a 2D box [-hx,hx]x[-hz,hz] centred at the origin, for a
+// point given in |coordinates| (qx, qz >= 0 side), with gradient w.r.t. qx, qz.
+Sd2 boxSd2(double qx, double qz, double hx, double hz) {
+  const double dx = qx - hx;
+  const double dz = qz - hz;
+  if (dx > 0.0 && dz > 0.0) {
+    const double len = std::hypot(dx, dz);
+    return {len, dx / len, dz / len};
+  }
+  if (dx >= dz) return {std::max(dx, 0.0) + std::min(dx, 0.0), 1.0, 0.0};
+  return {std::max(dz, 0.0) + std::min(dz, 0.0), 0.0, 1.0};
+}
+
+// Signed distance to a convex polygon given counter-clockwise by its boundary
+// segments (x = rho, y = z). Only the listed segments count as boundary.
+struct Segment2 {
+  double ax, ay, bx, by;
+};
+
+Sd2 convexSd2(double x, double y, const Segment2* segs, int count) {
+  bool outside = false;
+  double bestInside = -std::numeric_limits<double>::infinity();
+  double gInX = 0.0, gInY = 0.0;
+  double bestOut = std::numeric_limits<double>::infinity();
+  double gOutX = 0.0, gOutY = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const Segment2& s = segs[i];
+    const double ex = s.bx - s.ax, ey = s.by - s.ay;
+    const double len = std::hypot(ex, ey);
+    if (len <= 0.0) continue;
+    // Outward normal of a counter-clockwise polygon edge.
+    const double nx = ey / len, ny = -ex / len;
+    const double line = (x - s.ax) * nx + (y - s.ay) * ny;
+    if (line > 0.0) outside = true;
+    if (line > bestInside) {
+      bestInside = line;
+      gInX = nx;
+      gInY = ny;
+    }
+    const double t = std::clamp(((x - s.ax) * ex + (y - s.ay) * ey) / (len * len), 0.0, 1.0);
+    const double vx = x - (s.ax + t * ex), vy = y - (s.ay + t * ey);
+    const double dist = std::hypot(vx, vy);
+    if (dist < bestOut) {
+      bestOut = dist;
+      if (dist > 0.0) {
+        gOutX = vx / dist;
+        gOutY = vy / dist;
+      } else {
+        gOutX = nx;
+        gOutY = ny;
+      }
+    }
+  }
+  if (outside) return {bestOut, gOutX, gOutY};
+  return {bestInside, gInX, gInY};
+}
+
+double halfSpaceValue(const HalfSpace& s, const Vec3& p, Vec3& g) {
+  g = -s.normal;
+  return s.offset - s.normal.dot(p);
+}
+
+double boxValue(const Box& s, const Vec3& p, Vec3& g) {
+  const Vec3 local = s.axes.transpose() * (p - s.center);
+  const Vec3 q = local.cwiseAbs() - s.halfSize;
+  Vec3 gl;
+  double sd;
+  if ((q.array() > 0.0).any()) {
+    const Vec3 pos = q.cwiseMax(0.0);
+    sd = pos.norm();
+    gl = pos / sd;
+  } else {
+    int k = 0;
+    for (int i = 1; i < 3; ++i) {
+      if (q[i] > q[k]) k = i;
+    }
+    sd = q[k];
+    gl = Vec3::Unit(k);
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (local[i] < 0.0) gl[i] = -gl[i];
+  }
+  g = -(s.axes * gl);
+  return -sd;
+}
+
+double cylinderValue(const Cylinder& s, const Vec3& p, Vec3& g) {
+  const Meridian m = toMeridian(p, s.center, s.axis);
+  Sd2 sd = boxSd2(m.rho, std::abs(m.z), s.radius, 0.5 * s.height);
+  if (m.z < 0.0) sd.gZ = -sd.gZ;
+  return fromMeridian(sd, m, s.axis, g);
+}
+
+double coneValue(const Cone& s, const Vec3& p, Vec3& g) {
+  const Meridian m = toMeridian(p, s.center, s.axis);
+  const double h = 0.5 * s.height;
+  // Counter-clockwise trapezoid in (rho, z); the axis edge is not a boundary.
+  const std::array<Segment2, 3> segs = {{
+      {0.0, -h, s.radiusBottom, -h},             // bottom cap
+      {s.radiusBottom, -h, s.radiusTop, h},      // lateral surface
+      {s.radiusTop, h, 0.0, h},                  // top cap
+  }};
+  const Sd2 sd = convexSd2(m.rho, m.z, segs.data(), static_cast<int>(segs.size()));
+  return fromMeridian(sd, m, s.axis, g);
+}
+
+double sphereValue(const Sphere& s, const Vec3& p, Vec3& g) {
+  const Vec3 d = p - s.center;
+  const double len = d.norm();
+  g = len > 0.0 ? Vec3(-d / len) : Vec3(-Vec3::UnitZ());
+  return s.radius - len;
+}
+
+double torusValue(const Torus& s, const Vec3& p, Vec3& g) {
+  const Meridian m = toMeridian(p, s.center, s.axis);
+  const double qx = m.rho - s.majorRadius;
+  const double len = std::hypot(qx, m.z);
+  Sd2 sd{len - s.minorRadius, 1.0, 0.0};
+  if (len > 0.0) {
+    sd.gRho = qx / len;
+    sd.gZ = m.z / len;
+  }
+  return fromMeridian(sd, m, s.axis, g);
+}
+
+// Half extent along world axis k of a disc of radius r perpendicular to `axis`.
+Vec3 discExtent(const Vec3& axis, double r) {
+  Vec3 e;
+  for (int k = 0; k < 3; ++k) e[k] = r * std::sqrt(std::max(0.0, 1.0 - axis[k] * axis[k]));
+  return e;
+}
+
+bool finite(const Vec3& v) { return v.allFinite(); }
+
+void requireUnit(const Vec3& v, const char* what) {
+  if (!finite(v) || std::abs(v.norm() - 1.0) > 1e-6) {
+    throw std::invalid_argument(std::string(what) + " must be a finite unit vector");
+  }
+}
+
+void requirePositive(double x, const char* what) {
+  if (!std::isfinite(x) || !(x > 0.0)) {
+    throw std::invalid_argument(std::string(what) + " must be finite and > 0");
+  }
+}
+
+bool near(const Vec3& a, const Vec3& b, double tol) { return (a - b).cwiseAbs().maxCoeff() <= tol; }
+bool near(double a, double b, double tol) { return std::abs(a - b) <= tol; }
+
+}  // namespace
+
+double Primitive::value(const Vec3& p) const {
+  Vec3 g;
+  return valueAndGradient(p, g);
+}
+
+double Primitive::valueAndGradient(const Vec3& p, Vec3& gradient) const {
+  switch (type()) {
+    case PrimitiveType::HalfSpace: return halfSpaceValue(*as<HalfSpace>(), p, gradient);
+    case PrimitiveType::Box: return boxValue(*as<Box>(), p, gradient);
+    case PrimitiveType::Cylinder: return cylinderValue(*as<Cylinder>(), p, gradient);
+    case PrimitiveType::Cone: return coneValue(*as<Cone>(), p, gradient);
+    case PrimitiveType::Sphere: return sphereValue(*as<Sphere>(), p, gradient);
+    case PrimitiveType::Torus: return torusValue(*as<Torus>(), p, gradient);
+  }
+  return 0.0;
+}
+
+Aabb Primitive::bounds() const {
+  Aabb b;
+  switch (type()) {
+    case PrimitiveType::HalfSpace: return Aabb::everything();
+    case PrimitiveType::Box: {
+      const Box& s = *as<Box>();
+      const Vec3 e = s.axes.cwiseAbs() * s.halfSize;
+      b.min = s.center - e;
+      b.max = s.center + e;
+      return b;
+    }
+    case PrimitiveType::Cylinder: {
+      const Cylinder& s = *as<Cylinder>();
+      const Vec3 e = discExtent(s.axis, s.radius) + 0.5 * s.height * s.axis.cwiseAbs();
+      b.min = s.center - e;
+      b.max = s.center + e;
+      return b;
+    }
+    case PrimitiveType::Cone: {
+      const Cone& s = *as<Cone>();
+      const Vec3 bottom = s.center - 0.5 * s.height * s.axis;
+      const Vec3 top = s.center + 0.5 * s.height * s.axis;
+      const Vec3 eb = discExtent(s.axis, s.radiusBottom);
+      const Vec3 et = discExtent(s.axis, s.radiusTop);
+      b.extend(Vec3(bottom - eb));
+      b.extend(Vec3(bottom + eb));
+      b.extend(Vec3(top - et));
+      b.extend(Vec3(top + et));
+      return b;
+    }
+    case PrimitiveType::Sphere: {
+      const Sphere& s = *as<Sphere>();
+      b.min = s.center.array() - s.radius;
+      b.max = s.center.array() + s.radius;
+      return b;
+    }
+    case PrimitiveType::Torus: {
+      const Torus& s = *as<Torus>();
+      const Vec3 e = discExtent(s.axis, s.majorRadius + s.minorRadius) +
+                     s.minorRadius * s.axis.cwiseAbs();
+      b.min = s.center - e;
+      b.max = s.center + e;
+      return b;
+    }
+  }
+  return b;
+}
+
+double Primitive::volume() const {
+  switch (type()) {
+    case PrimitiveType::HalfSpace: return std::numeric_limits<double>::infinity();
+    case PrimitiveType::Box: return 8.0 * as<Box>()->halfSize.prod();
+    case PrimitiveType::Cylinder: {
+      const Cylinder& s = *as<Cylinder>();
+      return kPi * s.radius * s.radius * s.height;
+    }
+    case PrimitiveType::Cone: {
+      const Cone& s = *as<Cone>();
+      const double a = s.radiusBottom, b = s.radiusTop;
+      return kPi * s.height / 3.0 * (a * a + a * b + b * b);
+    }
+    case PrimitiveType::Sphere: {
+      const double r = as<Sphere>()->radius;
+      return 4.0 / 3.0 * kPi * r * r * r;
+    }
+    case PrimitiveType::Torus: {
+      const Torus& s = *as<Torus>();
+      return 2.0 * kPi * kPi * s.majorRadius * s.minorRadius * s.minorRadius;
+    }
+  }
+  return 0.0;
+}
+
+double Primitive::surfaceArea() const {
+  switch (type()) {
+    case PrimitiveType::HalfSpace: return std::numeric_limits<double>::infinity();
+    case PrimitiveType::Box: {
+      const Vec3& h = as<Box>()->halfSize;
+      return 8.0 * (h.x() * h.y() + h.y() * h.z() + h.x() * h.z());
+    }
+    case PrimitiveType::Cylinder: {
+      const Cylinder& s = *as<Cylinder>();
+      return 2.0 * kPi * s.radius * (s.height + s.radius);
+    }
+    case PrimitiveType::Cone: {
+      const Cone& s = *as<Cone>();
+      const double a = s.radiusBottom, b = s.radiusTop;
+      const double slant = std::hypot(a - b, s.height);
+      return kPi * (a + b) * slant + kPi * (a * a + b * b);
+    }
+    case PrimitiveType::Sphere: {
+      const double r = as<Sphere>()->radius;
+      return 4.0 * kPi * r * r;
+    }
+    case PrimitiveType::Torus: {
+      const Torus& s = *as<Torus>();
+      return 4.0 * kPi * kPi * s.majorRadius * s.minorRadius;
+    }
+  }
+  return 0.0;
+}
+
+void Primitive::validate() const {
+  switch (type()) {
+    case PrimitiveType::HalfSpace: {
+      const HalfSpace& s = *as<HalfSpace>();
+      requireUnit(s.normal, "halfspace normal");
+      if (!std::isfinite(s.offset)) throw std::invalid_argument("halfspace offset must be finite");
+      return;
+    }
+    case PrimitiveType::Box: {
+      const Box& s = *as<Box>();
+      if (!finite(s.center)) throw std::invalid_argument("box center must be finite");
+      for (int i = 0; i < 3; ++i) {
+        requireUnit(s.axes.col(i), "box axis");
+        requirePositive(s.halfSize[i], "box half size");
+      }
+      if ((s.axes.transpose() * s.axes - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+          s.axes.determinant() < 0.0) {
+        throw std::invalid_argument("box axes must form a right-handed orthonormal frame");
+      }
+      return;
+    }
+    case PrimitiveType::Cylinder: {
+      const Cylinder& s = *as<Cylinder>();
+      if (!finite(s.center)) throw std::invalid_argument("cylinder center must be finite");
+      requireUnit(s.axis, "cylinder axis");
+      requirePositive(s.radius, "cylinder radius");
+      requirePositive(s.height, "cylinder height");
+      return;
+    }
+    case PrimitiveType::Cone: {
+      const Cone& s = *as<Cone>();
+      if (!finite(s.center)) throw std::invalid_argument("cone center must be finite");
+      requireUnit(s.axis, "cone axis");
+      requirePositive(s.height, "cone height");
+      if (!std::isfinite(s.radiusBottom) || !std::isfinite(s.radiusTop) || s.radiusBottom < 0.0 ||
+          s.radiusTop < 0.0 || s.radiusBottom + s.radiusTop <= 0.0) {
+        throw std::invalid_argument("cone radii must be finite, >= 0 and not both 0");
+      }
+      return;
+    }
+    case PrimitiveType::Sphere: {
+      const Sphere& s = *as<Sphere>();
+      if (!finite(s.center)) throw std::invalid_argument("sphere center must be finite");
+      requirePositive(s.radius, "sphere radius");
+      return;
+    }
+    case PrimitiveType::Torus: {
+      const Torus& s = *as<Torus>();
+      if (!finite(s.center)) throw std::invalid_argument("torus center must be finite");
+      requireUnit(s.axis, "torus axis");
+      requirePositive(s.majorRadius, "torus major radius");
+      requirePositive(s.minorRadius, "torus minor radius");
+      if (s.minorRadius > s.majorRadius) {
+        throw std::invalid_argument("torus minor radius must not exceed the major radius");
+      }
+      return;
+    }
+  }
+}
+
+bool Primitive::approxEqual(const Primitive& other, double tol) const {
+  if (type() != other.type()) return false;
+  switch (type()) {
+    case PrimitiveType::HalfSpace: {
+      const HalfSpace &a = *as<HalfSpace>(), &b = *other.as<HalfSpace>();
+      return near(a.normal, b.normal, tol) && near(a.offset, b.offset, tol);
+    }
+    case PrimitiveType::Box: {
+      const Box &a = *as<Box>(), &b = *other.as<Box>();
+      return near(a.center, b.center, tol) && near(a.halfSize, b.halfSize, tol) &&
+             (a.axes - b.axes).cwiseAbs().maxCoeff() <= tol;
+    }
+    case PrimitiveType::Cylinder: {
+      const Cylinder &a = *as<Cylinder>(), &b = *other.as<Cylinder>();
+      return near(a.center, b.center, tol) && near(a.axis, b.axis, tol) &&
+             near(a.radius, b.radius, tol) && near(a.height, b.height, tol);
+    }
+    case PrimitiveType::Cone: {
+      const Cone &a = *as<Cone>(), &b = *other.as<Cone>();
+      return near(a.center, b.center, tol) && near(a.axis, b.axis, tol) &&
+             near(a.radiusBottom, b.radiusBottom, tol) && near(a.radiusTop, b.radiusTop, tol) &&
+             near(a.height, b.height, tol);
+    }
+    case PrimitiveType::Sphere: {
+      const Sphere &a = *as<Sphere>(), &b = *other.as<Sphere>();
+      return near(a.center, b.center, tol) && near(a.radius, b.radius, tol);
+    }
+    case PrimitiveType::Torus: {
+      const Torus &a = *as<Torus>(), &b = *other.as<Torus>();
+      return near(a.center, b.center, tol) && near(a.axis, b.axis, tol) &&
+             near(a.majorRadius, b.majorRadius, tol) && near(a.minorRadius, b.minorRadius, tol);
+    }
+  }
+  return false;
+}
+
+std::string_view primitiveTypeName(PrimitiveType type) {
+  switch (type) {
+    case PrimitiveType::HalfSpace: return "halfspace";
+    case PrimitiveType::Box: return "box";
+    case PrimitiveType::Cylinder: return "cylinder";
+    case PrimitiveType::Cone: return "cone";
+    case PrimitiveType::Sphere: return "sphere";
+    case PrimitiveType::Torus: return "torus";
+  }
+  return "unknown";
+}
+
+PrimitiveType primitiveTypeFromName(std::string_view name) {
+  for (PrimitiveType t : {PrimitiveType::HalfSpace, PrimitiveType::Box, PrimitiveType::Cylinder,
+                          PrimitiveType::Cone, PrimitiveType::Sphere, PrimitiveType::Torus}) {
+    if (primitiveTypeName(t) == name) return t;
+  }
+  throw std::invalid_argument("unknown primitive type '" + std::string(name) + "'");
+}
+
+}  // namespace csgvox
