@@ -10,6 +10,6 @@ $SUDO apt-get install -y -q --no-install-recommends \
   build-essential cmake ccache pkg-config \
   libcgal-dev libopenvdb-dev libboost-iostreams-dev libceres-dev \
   libeigen3-dev libtbb-dev libgmp-dev libmpfr-dev \
-  nlohmann-json3-dev libcli11-dev \
+  nlohmann-json3-dev libcli11-dev libnanoflann-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   openscad

@@ -1,0 +1,253 @@
+#include "primitives/surface_sampler.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+
+namespace csgvox {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+using Rng = std::mt19937_64;
+
+double uniform(Rng& rng) { return std::uniform_real_distribution<double>(0.0, 1.0)(rng); }
+
+// The part of one primitive's surface that is sampled, with its area.
+struct SurfaceDomain {
+  const Primitive* primitive = nullptr;
+  double area = 0.0;
+  // Half-spaces: a rectangle in the plane covering the tree's bounds.
+  Vec3 origin = Vec3::Zero(), u = Vec3::Zero(), v = Vec3::Zero();
+};
+
+SurfaceDomain makeDomain(const Primitive& p, const Aabb& bounds) {
+  SurfaceDomain d;
+  d.primitive = &p;
+  if (const auto* h = p.as<HalfSpace>()) {
+    const Mat3 frame = frameFromAxis(h->normal);
+    const Vec3 onPlane = h->offset * h->normal;
+    double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner((c & 1) ? bounds.max.x() : bounds.min.x(),
+                        (c & 2) ? bounds.max.y() : bounds.min.y(),
+                        (c & 4) ? bounds.max.z() : bounds.min.z());
+      const double cu = (corner - onPlane).dot(frame.col(0));
+      const double cv = (corner - onPlane).dot(frame.col(1));
+      umin = std::min(umin, cu), umax = std::max(umax, cu);
+      vmin = std::min(vmin, cv), vmax = std::max(vmax, cv);
+    }
+    d.origin = onPlane + umin * frame.col(0) + vmin * frame.col(1);
+    d.u = (umax - umin) * frame.col(0);
+    d.v = (vmax - vmin) * frame.col(1);
+    d.area = (umax - umin) * (vmax - vmin);
+  } else {
+    d.area = p.surfaceArea();
+  }
+  return d;
+}
+
+// A point on the circle of radius r in the plane of `frame`'s first two axes.
+Vec3 onDisc(const Mat3& frame, double r, Rng& rng) {
+  const double rad = r * std::sqrt(uniform(rng));
+  const double a = kTwoPi * uniform(rng);
+  return rad * (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
+}
+
+// A uniformly distributed point on the primitive's (clipped) surface.
+Vec3 samplePoint(const SurfaceDomain& d, Rng& rng) {
+  const Primitive& p = *d.primitive;
+  switch (p.type()) {
+    case PrimitiveType::HalfSpace: return d.origin + uniform(rng) * d.u + uniform(rng) * d.v;
+    case PrimitiveType::Box: {
+      const Box& b = *p.as<Box>();
+      const Vec3& h = b.halfSize;
+      const double areas[3] = {h.y() * h.z(), h.x() * h.z(), h.x() * h.y()};
+      double pick = uniform(rng) * (areas[0] + areas[1] + areas[2]);
+      int axis = 0;
+      while (axis < 2 && pick > areas[axis]) pick -= areas[axis++];
+      Vec3 local(h.x() * (2 * uniform(rng) - 1), h.y() * (2 * uniform(rng) - 1),
+                 h.z() * (2 * uniform(rng) - 1));
+      local[axis] = uniform(rng) < 0.5 ? -h[axis] : h[axis];
+      return b.center + b.axes * local;
+    }
+    case PrimitiveType::Cylinder: {
+      const Cylinder& c = *p.as<Cylinder>();
+      const Mat3 f = frameFromAxis(c.axis);
+      const double side = c.height, cap = 0.5 * c.radius;  // areas / (2 pi r)
+      const double pick = uniform(rng) * (side + 2 * cap);
+      if (pick < side) {
+        const double a = kTwoPi * uniform(rng);
+        return c.center + c.radius * (std::cos(a) * f.col(0) + std::sin(a) * f.col(1)) +
+               (uniform(rng) - 0.5) * c.height * c.axis;
+      }
+      const double z = pick < side + cap ? -0.5 * c.height : 0.5 * c.height;
+      return c.center + z * c.axis + onDisc(f, c.radius, rng);
+    }
+    case PrimitiveType::Cone: {
+      const Cone& c = *p.as<Cone>();
+      const Mat3 f = frameFromAxis(c.axis);
+      const double r0 = c.radiusBottom, r1 = c.radiusTop;
+      const double lateral = std::numbers::pi * (r0 + r1) * std::hypot(r0 - r1, c.height);
+      const double cap0 = std::numbers::pi * r0 * r0, cap1 = std::numbers::pi * r1 * r1;
+      const double pick = uniform(rng) * (lateral + cap0 + cap1);
+      if (pick < lateral) {
+        // Lateral area density is proportional to the local radius.
+        const double rmax = std::max(r0, r1);
+        double t = 0.0;
+        do {
+          t = uniform(rng);
+        } while (uniform(rng) * rmax > r0 + (r1 - r0) * t);
+        const double r = r0 + (r1 - r0) * t;
+        const double a = kTwoPi * uniform(rng);
+        return c.center + (t - 0.5) * c.height * c.axis +
+               r * (std::cos(a) * f.col(0) + std::sin(a) * f.col(1));
+      }
+      if (pick < lateral + cap0) return c.center - 0.5 * c.height * c.axis + onDisc(f, r0, rng);
+      return c.center + 0.5 * c.height * c.axis + onDisc(f, r1, rng);
+    }
+    case PrimitiveType::Sphere: {
+      const Sphere& s = *p.as<Sphere>();
+      std::normal_distribution<double> g;
+      Vec3 dir;
+      do {
+        dir = Vec3(g(rng), g(rng), g(rng));
+      } while (dir.norm() < 1e-12);
+      return s.center + s.radius * dir.normalized();
+    }
+    case PrimitiveType::Torus: {
+      const Torus& t = *p.as<Torus>();
+      const Mat3 f = frameFromAxis(t.axis);
+      const double R = t.majorRadius, r = t.minorRadius;
+      double theta = 0.0;
+      do {
+        theta = kTwoPi * uniform(rng);
+      } while (uniform(rng) * (R + r) > R + r * std::cos(theta));
+      const double phi = kTwoPi * uniform(rng);
+      const Vec3 radial = std::cos(phi) * f.col(0) + std::sin(phi) * f.col(1);
+      return t.center + (R + r * std::cos(theta)) * radial + r * std::sin(theta) * t.axis;
+    }
+  }
+  return Vec3::Zero();
+}
+
+struct Candidate {
+  Vec3 point;
+  Vec3 normal;     // outward normal of the solid (valid when accepted)
+  int domain = 0;
+  bool accepted = false;
+};
+
+}  // namespace
+
+SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
+  if (tree.empty()) throw std::invalid_argument("cannot sample an empty tree");
+  const Aabb bounds = tree.bounds();
+  if (bounds.isEmpty()) throw std::invalid_argument("the solid is empty");
+  if (!bounds.isBounded()) {
+    throw std::invalid_argument("the solid is unbounded (a half-space or complement not clipped)");
+  }
+  if (options.points == 0) throw std::invalid_argument("the number of points must be > 0");
+  if (!(options.noise >= 0.0) || !std::isfinite(options.noise)) {
+    throw std::invalid_argument("noise must be a finite number >= 0");
+  }
+  if (options.dropPatches < 0 || !(options.patchRadius > 0.0) ||
+      !std::isfinite(options.patchRadius)) {
+    throw std::invalid_argument("drop patches must be >= 0 and the patch radius > 0");
+  }
+  const double diag = bounds.diagonal();
+  const double step = 1e-6 * diag;   // probe distance across the surface
+  const double onSurface = 1e-9 * diag;
+
+  std::vector<SurfaceDomain> domains;
+  for (const Node* leaf : tree.leaves()) domains.push_back(makeDomain(leaf->primitive, bounds));
+  std::vector<double> cumulative;
+  double totalArea = 0.0;
+  for (const SurfaceDomain& d : domains) cumulative.push_back(totalArea += d.area);
+
+  Rng rng(options.seed);
+  std::vector<Vec3> patchCentres;
+  const double patchR2 = std::pow(options.patchRadius * diag, 2);
+  std::vector<std::size_t> tried(domains.size(), 0), kept(domains.size(), 0);
+  SurfaceSample out;
+  out.diagonal = diag;
+  std::size_t batch = std::max<std::size_t>(4096, options.points);
+  std::size_t totalTried = 0;
+  const std::size_t maxTried = std::max<std::size_t>(50'000'000, 200 * options.points);
+  std::vector<Candidate> cands;
+  while (out.cloud.size() < options.points) {
+    if (totalTried >= maxTried) {
+      throw std::invalid_argument("the solid has no boundary to sample (is it empty?)");
+    }
+    cands.resize(batch);
+    for (Candidate& c : cands) {
+      const double pick = uniform(rng) * totalArea;
+      c.domain = int(std::upper_bound(cumulative.begin(), cumulative.end(), pick) -
+                     cumulative.begin());
+      c.domain = std::min<int>(c.domain, int(domains.size()) - 1);
+      c.point = samplePoint(domains[c.domain], rng);
+      c.accepted = false;
+    }
+    tbb::parallel_for(std::size_t(0), cands.size(), [&](std::size_t i) {
+      Candidate& c = cands[i];
+      if (!bounds.contains(c.point)) return;
+      if (std::abs(tree.value(c.point)) > onSurface) return;
+      Vec3 g;
+      domains[c.domain].primitive->valueAndGradient(c.point, g);
+      const double len = g.norm();
+      if (!(len > 0.5)) return;  // on an edge or an axis: no well-defined normal
+      const Vec3 n = -g / len;  // the primitive's outward normal
+      const bool outsideAhead = tree.value(c.point + step * n) < 0.0;
+      const bool insideBehind = tree.value(c.point - step * n) > 0.0;
+      const bool insideAhead = tree.value(c.point + step * n) > 0.0;
+      const bool outsideBehind = tree.value(c.point - step * n) < 0.0;
+      if (outsideAhead && insideBehind) {
+        c.normal = n;
+        c.accepted = true;
+      } else if (insideAhead && outsideBehind) {
+        c.normal = -n;  // a subtracted primitive: the solid lies outside it
+        c.accepted = true;
+      }
+    });
+    totalTried += cands.size();
+    for (const Candidate& c : cands) ++tried[c.domain];
+    // Hole centres are drawn from the first accepted points.
+    if (patchCentres.empty() && options.dropPatches > 0) {
+      std::vector<const Candidate*> acc;
+      for (const Candidate& c : cands) {
+        if (c.accepted) acc.push_back(&c);
+      }
+      for (int k = 0; k < options.dropPatches && !acc.empty(); ++k) {
+        patchCentres.push_back(acc[std::size_t(uniform(rng) * acc.size()) % acc.size()]->point);
+      }
+    }
+    for (const Candidate& c : cands) {
+      if (!c.accepted) continue;
+      ++kept[c.domain];
+      bool inHole = false;
+      for (const Vec3& centre : patchCentres) inHole |= (c.point - centre).squaredNorm() < patchR2;
+      if (inHole || out.cloud.size() >= options.points) continue;
+      out.cloud.points.push_back(c.point);
+      out.cloud.normals.push_back(c.normal);
+    }
+    // Aim the next batch at what is missing, from the acceptance seen so far.
+    std::size_t keptTotal = 0;
+    for (std::size_t k : kept) keptTotal += k;
+    const double rate = std::max(1e-4, double(keptTotal) / double(totalTried));
+    const double missing = double(options.points - std::min(options.points, out.cloud.size()));
+    batch = std::clamp<std::size_t>(std::size_t(1.2 * missing / rate) + 1024, 4096, 4'000'000);
+  }
+  for (std::size_t i = 0; i < domains.size(); ++i) {
+    if (tried[i] > 0) out.surfaceArea += domains[i].area * double(kept[i]) / double(tried[i]);
+  }
+  if (options.noise > 0.0) {
+    std::normal_distribution<double> g(0.0, options.noise * diag);
+    for (Vec3& p : out.cloud.points) p += Vec3(g(rng), g(rng), g(rng));
+  }
+  return out;
+}
+
+}  // namespace csgvox
