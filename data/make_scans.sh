@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Regenerates the bundled scans of every part: data/<part>/scan.ply (clean)
+# and data/<part>/scan_noisy.ply (Gaussian noise, sigma = 0.5 % of the
+# diagonal), 10 000 points each with normals.
+# Usage: data/make_scans.sh [path/to/csgvox]
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+csgvox=${1:-"$here/../build/app/csgvox"}
+seed=1
+for tree in "$here"/*/tree.json; do
+  part=$(dirname "$tree")
+  "$csgvox" sample "$tree" -o "$part/scan.ply" --points 10000 --seed "$seed" --quiet
+  "$csgvox" sample "$tree" -o "$part/scan_noisy.ply" --points 10000 --noise 0.005 \
+    --seed $((seed + 1000)) --quiet
+  seed=$((seed + 1))
+done
