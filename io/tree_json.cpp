@@ -6,6 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace csgvox {
 namespace {
@@ -13,17 +16,24 @@ namespace {
 using Json = nlohmann::ordered_json;
 constexpr const char* kFormat = "csgvox-tree";
 constexpr int kVersion = 1;
+// Deepest accepted nesting of operations. Trees are read, evaluated and freed
+// recursively; this keeps that well inside the stack, also in sanitizer builds.
+constexpr std::size_t kMaxDepth = 1000;
 
 Json vec(const Vec3& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
-Vec3 readVec(const Json& j, const char* key) {
-  if (!j.contains(key)) throw std::invalid_argument(std::string("missing \"") + key + "\"");
-  const Json& a = j.at(key);
+// The vector in `a`; `what` names it in the error message.
+Vec3 toVec(const Json& a, const std::string& what) {
   if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() ||
       !a[2].is_number()) {
-    throw std::invalid_argument(std::string("\"") + key + "\" must be an array of 3 numbers");
+    throw std::invalid_argument(what + " must be an array of 3 numbers");
   }
   return Vec3(a[0].get<double>(), a[1].get<double>(), a[2].get<double>());
+}
+
+Vec3 readVec(const Json& j, const char* key) {
+  if (!j.contains(key)) throw std::invalid_argument(std::string("missing \"") + key + "\"");
+  return toVec(j.at(key), std::string("\"") + key + "\"");
 }
 
 double readNumber(const Json& j, const char* key) {
@@ -81,9 +91,7 @@ Primitive primitiveFromJson(const Json& j) {
           throw std::invalid_argument("\"axes\" must be an array of 3 vectors");
         }
         for (int i = 0; i < 3; ++i) {
-          Json wrap;
-          wrap["v"] = a[i];
-          b.axes.col(i) = readVec(wrap, "v");
+          b.axes.col(i) = toVec(a[i], "\"axes\"[" + std::to_string(i) + "]");
         }
       }
       return b;
@@ -112,34 +120,71 @@ Json nodeToJson(const Node& node) {
   return j;
 }
 
-CsgTree nodeFromJson(const Json& j, int depth) {
-  if (depth > 10000) throw std::invalid_argument("tree is nested too deeply");
-  if (!j.is_object()) throw std::invalid_argument("a node must be a JSON object");
+// Location of a node for error messages, e.g. "root.children[2].children[0]";
+// the middle of a very deep path is elided.
+std::string nodePath(const std::vector<std::size_t>& path) {
+  constexpr std::size_t kEnds = 4;  // levels shown at each end of a long path
+  std::string out = "root";
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    if (path.size() > 3 * kEnds && k == kEnds) {
+      out += "...(" + std::to_string(path.size() - 2 * kEnds) + " more levels)";
+      k = path.size() - kEnds;
+    }
+    out += ".children[" + std::to_string(path[k]) + "]";
+  }
+  return out;
+}
+
+// Reads the node `j` at `path` (child indices from the root); problems are
+// reported with that location.
+CsgTree nodeFromJson(const Json& j, std::vector<std::size_t>& path) {
+  auto fail = [&](const std::string& problem) {
+    return std::invalid_argument(nodePath(path) + ": " + problem);
+  };
+  if (path.size() > kMaxDepth) {
+    throw fail("tree is nested too deeply (more than " + std::to_string(kMaxDepth) + " levels)");
+  }
+  if (!j.is_object()) throw fail("a node must be a JSON object");
   if (j.contains("type")) {
     std::string name;
     if (j.contains("name")) {
-      if (!j.at("name").is_string()) throw std::invalid_argument("\"name\" must be a string");
+      if (!j.at("name").is_string()) throw fail("\"name\" must be a string");
       name = j.at("name").get<std::string>();
     }
-    return CsgTree::leaf(primitiveFromJson(j), name);
+    try {
+      Primitive primitive = primitiveFromJson(j);
+      primitive.validate();
+      return CsgTree::leaf(std::move(primitive), name);
+    } catch (const std::invalid_argument& e) {
+      const std::string label =
+          name.empty() ? nodePath(path) : nodePath(path) + " \"" + name + "\"";
+      throw std::invalid_argument(label + ": " + e.what());
+    }
   }
   if (!j.contains("op") || !j.at("op").is_string()) {
-    throw std::invalid_argument("a node needs \"type\" (primitive) or \"op\" (operation)");
+    throw fail("a node needs \"type\" (primitive) or \"op\" (operation)");
   }
   const std::string op = j.at("op").get<std::string>();
+  if (op != "union" && op != "intersection" && op != "difference" && op != "complement") {
+    throw fail("unknown operation \"" + op + "\"");
+  }
   if (!j.contains("children") || !j.at("children").is_array() || j.at("children").empty()) {
-    throw std::invalid_argument("operation \"" + op + "\" needs a non-empty \"children\" array");
+    throw fail("operation \"" + op + "\" needs a non-empty \"children\" array");
+  }
+  const Json& list = j.at("children");
+  if (op == "complement" && list.size() != 1) {
+    throw fail("complement needs exactly one child, not " + std::to_string(list.size()));
   }
   std::vector<CsgTree> children;
-  for (const Json& c : j.at("children")) children.push_back(nodeFromJson(c, depth + 1));
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    path.push_back(i);
+    children.push_back(nodeFromJson(list[i], path));
+    path.pop_back();
+  }
   if (op == "union") return CsgTree::unite(children);
   if (op == "intersection") return CsgTree::intersect(children);
   if (op == "difference") return CsgTree::subtract(children);
-  if (op == "complement") {
-    if (children.size() != 1) throw std::invalid_argument("complement needs exactly one child");
-    return CsgTree::complement(children.front());
-  }
-  throw std::invalid_argument("unknown operation \"" + op + "\"");
+  return CsgTree::complement(children.front());
 }
 
 }  // namespace
@@ -156,12 +201,15 @@ CsgTree readTreeJson(std::istream& in, const std::string& source) {
     if (j.contains("format") && j.at("format") != kFormat) {
       throw std::invalid_argument("\"format\" is not \"csgvox-tree\"");
     }
-    if (j.contains("version") && (!j.at("version").is_number_integer() ||
-                                  j.at("version").get<int>() > kVersion)) {
-      throw std::invalid_argument("unsupported \"version\" (this csgvox reads version 1)");
+    // Compared as a JSON value: a narrowing get<int>() would accept 2^32 + 1.
+    if (j.contains("version") &&
+        (!j.at("version").is_number_integer() || j.at("version") != Json(kVersion))) {
+      throw std::invalid_argument("unsupported \"version\" " + j.at("version").dump() +
+                                  " (this csgvox reads version 1)");
     }
     if (!j.contains("root")) throw std::invalid_argument("missing \"root\"");
-    CsgTree tree = nodeFromJson(j.at("root"), 0);
+    std::vector<std::size_t> path;
+    CsgTree tree = nodeFromJson(j.at("root"), path);
     tree.validate();
     return tree;
   } catch (const nlohmann::json::exception& e) {

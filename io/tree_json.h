@@ -17,6 +17,7 @@ CsgTree readTreeJson(std::istream& in, const std::string& source = "<stream>");
 CsgTree readTreeJson(const std::filesystem::path& path);
 
 /// Writes a tree as indented JSON; numbers round-trip exactly.
+/// @throw std::invalid_argument for an empty tree.
 void writeTreeJson(std::ostream& out, const CsgTree& tree);
 /// Writes a tree.json file atomically. @throw IoError.
 void writeTreeJson(const std::filesystem::path& path, const CsgTree& tree);

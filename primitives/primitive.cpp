@@ -251,9 +251,9 @@ Aabb Primitive::bounds() const {
       return b;
     }
     case PrimitiveType::Torus: {
+      // The torus is its centre circle swept by a ball of the minor radius.
       const Torus& s = *as<Torus>();
-      const Vec3 e = discExtent(s.axis, s.majorRadius + s.minorRadius) +
-                     s.minorRadius * s.axis.cwiseAbs();
+      const Vec3 e = discExtent(s.axis, s.majorRadius).array() + s.minorRadius;
       b.min = s.center - e;
       b.max = s.center + e;
       return b;
