@@ -1,0 +1,52 @@
+#pragma once
+/// Phase 1 of Wu et al. §4.1: truncate a root primitive by intersecting it
+/// with, or subtracting from it, some of its neighbours, choosing the actions
+/// x that minimise Eq. 4:
+///   E(x) = (1/L) Σ x_i − α |V+(root) ∩ V(sub)| / |V+(root) ∪ V−(sub)|.
+
+#include "voxel/voxel_set.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace csgvox {
+
+/// A truncation action on a root.
+struct SubtreeAction {
+  std::uint32_t primitive = 0;  ///< index of the neighbour in the candidate list
+  bool subtract = false;        ///< false: root ∩ neighbour; true: root − neighbour
+  bool operator==(const SubtreeAction&) const = default;
+};
+
+/// Options of selectSubtree.
+struct SubtreeOptions {
+  double alpha = 0.9;                  ///< weight of the fit term of Eq. 4
+  std::uint64_t nodeBudget = 2'000'000;  ///< branch-and-bound nodes before falling back to local search
+};
+
+/// Result of selectSubtree.
+struct SubtreeResult {
+  std::vector<SubtreeAction> actions;  ///< chosen actions
+  double energy = 0.0;                 ///< E(x) of the choice
+  VoxelSet voxels;                     ///< V(sub): the truncated root's voxels
+  std::size_t actionCount = 0;         ///< L: the number of actions considered (2 |Ψ|)
+  std::size_t usefulActions = 0;       ///< actions left after removing dominated ones
+  bool provedOptimal = false;          ///< true when branch and bound finished
+};
+
+/// Chooses the truncation of `root` (voxel set V(root)) by its neighbours,
+/// given the voxels labelled inside. `neighbours[i]` is V of candidate
+/// `neighbourIds[i]`. Exact (branch and bound with a fit-term bound) unless
+/// the node budget runs out, in which case the best solution of a local search
+/// with restarts is returned and provedOptimal is false.
+SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
+                            const std::vector<const VoxelSet*>& neighbours,
+                            const std::vector<std::uint32_t>& neighbourIds,
+                            const SubtreeOptions& options = {});
+
+/// E(x) of Eq. 4 for a given choice, evaluated directly (for tests).
+double subtreeEnergy(const VoxelSet& root, const VoxelSet& inside,
+                     const std::vector<const VoxelSet*>& neighbours,
+                     const std::vector<std::uint8_t>& chosen, double alpha);
+
+}  // namespace csgvox

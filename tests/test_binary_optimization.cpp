@@ -1,0 +1,147 @@
+// Phase 1 (Eq. 4) and phase 2 (Eq. 6) solvers against brute-force
+// enumeration on random instances.
+
+#include "optimize/subtree_selection.h"
+#include "optimize/union_selection.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace csgvox {
+namespace {
+
+// Random blob-like sets: unions of random intervals, so that sets overlap in
+// structured ways as primitives do.
+VoxelSet randomSet(std::size_t bits, std::mt19937_64& rng, int intervals, std::size_t maxLen) {
+  VoxelSet s(bits);
+  std::uniform_int_distribution<std::size_t> start(0, bits - 1), len(1, maxLen);
+  for (int k = 0; k < intervals; ++k) {
+    const std::size_t a = start(rng), l = len(rng);
+    for (std::size_t i = a; i < std::min(bits, a + l); ++i) s.set(i);
+  }
+  return s;
+}
+
+double bruteForceSubtree(const VoxelSet& root, const VoxelSet& inside,
+                         const std::vector<const VoxelSet*>& nb, double alpha) {
+  const std::size_t L = 2 * nb.size();
+  double best = 1e300;
+  for (std::uint64_t mask = 0; mask < (std::uint64_t(1) << L); ++mask) {
+    std::vector<std::uint8_t> x(L);
+    for (std::size_t a = 0; a < L; ++a) x[a] = (mask >> a) & 1;
+    best = std::min(best, subtreeEnergy(root, inside, nb, x, alpha));
+  }
+  return best;
+}
+
+TEST(SubtreeSelection, MatchesBruteForceOnRandomInstances) {
+  std::mt19937_64 rng(7);
+  int checked = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::size_t bits = 300 + trial * 7;
+    const VoxelSet inside = randomSet(bits, rng, 4, bits / 3);
+    const VoxelSet root = randomSet(bits, rng, 2, bits / 2);
+    const int n = 1 + trial % 7;  // up to 14 actions: 16384 subsets
+    std::vector<VoxelSet> sets;
+    for (int i = 0; i < n; ++i) sets.push_back(randomSet(bits, rng, 2, bits / 4));
+    std::vector<const VoxelSet*> nb;
+    std::vector<std::uint32_t> ids;
+    for (int i = 0; i < n; ++i) nb.push_back(&sets[i]), ids.push_back(std::uint32_t(100 + i));
+    for (double alpha : {0.9, 0.3}) {
+      SubtreeOptions o;
+      o.alpha = alpha;
+      const SubtreeResult r = selectSubtree(root, inside, nb, ids, o);
+      const double brute = bruteForceSubtree(root, inside, nb, alpha);
+      EXPECT_TRUE(r.provedOptimal);
+      EXPECT_NEAR(r.energy, brute, 1e-12) << "trial " << trial;
+      // The reported energy and voxels are those of the reported actions.
+      std::vector<std::uint8_t> x(2 * n, 0);
+      VoxelSet sub = root;
+      for (const SubtreeAction& a : r.actions) {
+        ASSERT_GE(a.primitive, 100u);
+        const std::size_t i = a.primitive - 100;
+        x[2 * i + (a.subtract ? 1 : 0)] = 1;
+        if (a.subtract) {
+          sub.subtract(sets[i]);
+        } else {
+          sub &= sets[i];
+        }
+      }
+      EXPECT_NEAR(subtreeEnergy(root, inside, nb, x, alpha), r.energy, 1e-12);
+      EXPECT_EQ(sub, r.voxels);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 120);
+}
+
+TEST(SubtreeSelection, TruncatesABoxToTheInsideExactly) {
+  // Root covers [0, 100); inside is [0, 60); neighbour A = [0, 60) (intersect
+  // with it), B = [60, 100) (subtract it), C unrelated.
+  VoxelSet root(100), inside(100), a(100), b(100), c(100);
+  for (int i = 0; i < 100; ++i) root.set(i);
+  for (int i = 0; i < 60; ++i) inside.set(i), a.set(i);
+  for (int i = 60; i < 100; ++i) b.set(i);
+  for (int i = 10; i < 20; ++i) c.set(i);
+  const SubtreeResult r = selectSubtree(root, inside, {&a, &b, &c}, {0, 1, 2});
+  ASSERT_EQ(r.actions.size(), 1u);  // one action suffices; two would cost more
+  EXPECT_EQ(r.voxels, inside);
+  EXPECT_TRUE(r.provedOptimal);
+}
+
+double bruteForceUnion(const VoxelSet& inside, const std::vector<const VoxelSet*>& cands,
+                       double beta) {
+  double best = 1e300;
+  for (std::uint64_t mask = 0; mask < (std::uint64_t(1) << cands.size()); ++mask) {
+    std::vector<std::uint8_t> z(cands.size());
+    for (std::size_t i = 0; i < cands.size(); ++i) z[i] = (mask >> i) & 1;
+    best = std::min(best, unionEnergy(inside, cands, z, beta));
+  }
+  return best;
+}
+
+TEST(UnionSelection, MatchesBruteForceOnRandomInstances) {
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::size_t bits = 500 + trial * 5;
+    const VoxelSet inside = randomSet(bits, rng, 5, bits / 4);
+    const int m = 2 + trial % 15;  // up to 16 candidates
+    std::vector<VoxelSet> sets;
+    for (int i = 0; i < m; ++i) sets.push_back(randomSet(bits, rng, 1, bits / 5) & inside);
+    std::vector<const VoxelSet*> cands;
+    for (const VoxelSet& s : sets) cands.push_back(&s);
+    for (double beta : {0.9, 0.2}) {
+      UnionOptions o;
+      o.beta = beta;
+      const UnionResult r = selectUnion(inside, cands, o);
+      EXPECT_TRUE(r.provedOptimal);
+      EXPECT_NEAR(r.energy, bruteForceUnion(inside, cands, beta), 1e-12) << "trial " << trial;
+      std::vector<std::uint8_t> z(m, 0);
+      for (std::uint32_t i : r.chosen) z[i] = 1;
+      EXPECT_NEAR(unionEnergy(inside, cands, z, beta), r.energy, 1e-12);
+    }
+  }
+}
+
+TEST(UnionSelection, ScalesToHundredsOfCandidates) {
+  std::mt19937_64 rng(5);
+  const std::size_t bits = 64 * 64 * 64;
+  const VoxelSet inside = randomSet(bits, rng, 40, bits / 20);
+  std::vector<VoxelSet> sets;
+  for (int i = 0; i < 300; ++i) sets.push_back(randomSet(bits, rng, 1, bits / 30) & inside);
+  std::vector<const VoxelSet*> cands;
+  for (const VoxelSet& s : sets) cands.push_back(&s);
+  UnionOptions o;
+  o.nodeBudget = 20000;
+  const UnionResult r = selectUnion(inside, cands, o);
+  // Not necessarily proved optimal, but never worse than taking nothing or
+  // taking the single best candidate.
+  std::vector<std::uint8_t> none(cands.size(), 0);
+  EXPECT_LE(r.energy, unionEnergy(inside, cands, none, o.beta));
+  EXPECT_GT(r.covered, 0u);
+  EXPECT_FALSE(r.chosen.empty());
+}
+
+}  // namespace
+}  // namespace csgvox

@@ -1,0 +1,30 @@
+#pragma once
+/// Description sets of candidate solids on a labelled voxel grid (Wu §4.1):
+/// V = voxels whose centre lies in the solid, V+ = V ∩ inside,
+/// V− = V ∩ outside, and μ = whether the solid reaches the grid's border.
+
+#include "primitives/csg_tree.h"
+#include "voxel/labeling.h"
+
+#include <span>
+#include <vector>
+
+namespace csgvox {
+
+/// The description of one candidate solid.
+struct DescriptionSet {
+  VoxelSet voxels;          ///< V: voxels whose centre is in the solid (f >= 0)
+  std::size_t plus = 0;     ///< |V+| = |V ∩ inside|
+  std::size_t minus = 0;    ///< |V−| = |V ∩ outside|
+  bool exceedsGrid = false; ///< μ: the solid reaches the outermost layer of voxels
+};
+
+/// Computes the description of `solid`. Only voxels inside the solid's
+/// bounds are evaluated.
+DescriptionSet describe(const CsgTree& solid, const VoxelGrid& grid, const VoxelLabels& labels);
+
+/// Descriptions of many solids, in parallel; the result is in input order.
+std::vector<DescriptionSet> describeAll(std::span<const CsgTree> solids, const VoxelGrid& grid,
+                                        const VoxelLabels& labels);
+
+}  // namespace csgvox
