@@ -51,6 +51,13 @@ void writeFileAtomically(const fs::path& path, const std::function<void(std::ost
   }
 }
 
+void requireNotInput(const fs::path& output, const fs::path& input) {
+  std::error_code ec;
+  if (fs::exists(output, ec) && fs::equivalent(output, input, ec)) {
+    throw IoError(output.string() + ": is the input file; refusing to overwrite it");
+  }
+}
+
 std::string lowerExtension(const fs::path& path) {
   std::string ext = path.extension().string();
   if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);

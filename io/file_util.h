@@ -21,6 +21,10 @@ void writeFileAtomically(const std::filesystem::path& path,
                          const std::function<void(std::ostream&)>& write,
                          bool binary = false);
 
+/// Refuses to write `output` when it is the same file as `input`.
+/// @throw IoError "<output>: is the input file; refusing to overwrite it".
+void requireNotInput(const std::filesystem::path& output, const std::filesystem::path& input);
+
 /// Lower-case extension of path without the dot ("ply", "xyz", ...).
 std::string lowerExtension(const std::filesystem::path& path);
 

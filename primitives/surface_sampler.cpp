@@ -232,6 +232,7 @@ SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
       if (inHole || out.cloud.size() >= options.points) continue;
       out.cloud.points.push_back(c.point);
       out.cloud.normals.push_back(c.normal);
+      out.source.push_back(std::uint32_t(c.domain));
     }
     // Aim the next batch at what is missing, from the acceptance seen so far.
     std::size_t keptTotal = 0;

@@ -23,6 +23,9 @@ struct SurfaceSample {
   PointCloud cloud;           ///< points on the solid's boundary with unit outward normals
   double surfaceArea = 0.0;   ///< Monte-Carlo estimate of the boundary's area
   double diagonal = 0.0;      ///< D: diagonal of the tree's bounding box
+  /// For each point, the index (in tree.leaves() order) of the primitive whose
+  /// surface it was sampled on: a ground-truth segmentation of the scan.
+  std::vector<std::uint32_t> source;
 };
 
 /// Samples points uniformly (by area) on the boundary of the solid. Points

@@ -51,11 +51,15 @@ TEST(SurfaceSampler, PointsLieOnTheSurfaceWithOutwardNormals) {
 TEST(SurfaceSampler, HoleWallsAreSampledWithInwardFacingNormals) {
   const CsgTree tree = plateWithHoles();
   const SurfaceSample s = sampleSurface(tree, {});
+  ASSERT_EQ(s.source.size(), s.cloud.size());
   int onWall = 0;
   for (std::size_t i = 0; i < s.cloud.size(); ++i) {
     const Vec3& p = s.cloud.points[i];
     const Vec3 c(p.x() < 0 ? -30 : 30, p.y() < 0 ? -20 : 20, p.z());
-    if (std::abs((p - c).norm() - 4.0) < 1e-9) {
+    const bool wall = std::abs((p - c).norm() - 4.0) < 1e-9;
+    // The ground-truth segmentation: leaf 0 is the plate, 1-4 the holes.
+    EXPECT_EQ(s.source[i] != 0, wall);
+    if (wall) {
       ++onWall;
       // The wall's outward normal (as seen from the solid) points to the axis.
       EXPECT_GT(s.cloud.normals[i].dot((c - p).normalized()), 0.999);

@@ -1,0 +1,171 @@
+#include "io/scad_export.h"
+
+#include "io/file_util.h"
+#include "io/tree_names.h"
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <ostream>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace csgvox {
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+std::string vec(const Vec3& v) { return formatVector(v); }
+
+std::string translate(const Vec3& c) {
+  if (c.isZero(0.0)) return "";
+  return "translate(" + vec(c) + ") ";
+}
+
+// Rotation taking +z to `axis`, as OpenSCAD's rotate(a, v).
+std::string rotateZTo(const Vec3& axis) {
+  const Vec3 z = Vec3::UnitZ();
+  const double c = std::clamp(z.dot(axis), -1.0, 1.0);
+  if (c >= 1.0 - 1e-15) return "";
+  if (c <= -1.0 + 1e-15) return "rotate(a = 180, v = [1, 0, 0]) ";
+  const Vec3 v = z.cross(axis).normalized();
+  return "rotate(a = " + formatNumber(std::acos(c) * kDeg) + ", v = " + vec(v) + ") ";
+}
+
+// OpenSCAD's rotate([a, b, c]) is Rz(c) * Ry(b) * Rx(a).
+std::string rotateEuler(const Mat3& r) {
+  if (r.isIdentity(1e-15)) return "";
+  double a, b, c;
+  const double sb = std::clamp(-r(2, 0), -1.0, 1.0);
+  b = std::asin(sb);
+  if (std::abs(sb) < 1.0 - 1e-12) {
+    a = std::atan2(r(2, 1), r(2, 2));
+    c = std::atan2(r(1, 0), r(0, 0));
+  } else {
+    c = 0.0;
+    a = std::atan2(-r(1, 2), r(1, 1));
+  }
+  return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
+}
+
+// The box described with the permutation/flip of its axes closest to the
+// world axes, so axis-aligned boxes need no rotation at all.
+Box canonicalBox(const Box& box) {
+  static const std::array<std::array<int, 3>, 6> perms = {
+      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  Box best = box;
+  double bestTrace = -1e300;
+  for (const auto& perm : perms) {
+    for (int signs = 0; signs < 8; ++signs) {
+      Box b = box;
+      for (int i = 0; i < 3; ++i) {
+        b.axes.col(i) = box.axes.col(perm[i]) * ((signs >> i) & 1 ? -1.0 : 1.0);
+        b.halfSize[i] = box.halfSize[perm[i]];
+      }
+      if (b.axes.determinant() <= 0.0) continue;
+      if (b.axes.trace() > bestTrace + 1e-12) {
+        bestTrace = b.axes.trace();
+        best = b;
+      }
+    }
+  }
+  return best;
+}
+
+struct Writer {
+  std::ostream& out;
+  const std::unordered_map<const Node*, std::string>& names;
+  Aabb part;            // bounds of the bounded primitives
+  double bigSize = 0;   // edge of the boxes standing in for unbounded sets
+
+  std::string bigBox(const Mat3& frame, const Vec3& center, const Vec3& size) const {
+    return translate(center) + rotateEuler(frame) + "cube(" + vec(size) + ", center = true);";
+  }
+
+  std::string body(const Primitive& p) const {
+    if (const auto* h = p.as<HalfSpace>()) {
+      // A slab of the half-space covering the part: its top face is the plane.
+      const Vec3 onPlane =
+          part.center() - (h->normal.dot(part.center()) - h->offset) * h->normal;
+      return bigBox(frameFromAxis(h->normal), onPlane - 0.5 * bigSize * h->normal,
+                    Vec3::Constant(bigSize)) +
+             "  // halfspace " + vec(h->normal) + ".x <= " + formatNumber(h->offset);
+    }
+    if (const auto* b0 = p.as<Box>()) {
+      const Box b = canonicalBox(*b0);
+      return translate(b.center) + rotateEuler(b.axes) + "cube(" + vec(2.0 * b.halfSize) +
+             ", center = true);";
+    }
+    if (const auto* c = p.as<Cylinder>()) {
+      return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " +
+             formatNumber(c->height) + ", r = " + formatNumber(c->radius) + ", center = true);";
+    }
+    if (const auto* c = p.as<Cone>()) {
+      return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " +
+             formatNumber(c->height) + ", r1 = " + formatNumber(c->radiusBottom) +
+             ", r2 = " + formatNumber(c->radiusTop) + ", center = true);";
+    }
+    if (const auto* s = p.as<Sphere>()) {
+      return translate(s->center) + "sphere(r = " + formatNumber(s->radius) + ");";
+    }
+    if (const auto* t = p.as<Torus>()) {
+      return translate(t->center) + rotateZTo(t->axis) + "rotate_extrude() translate([" +
+             formatNumber(t->majorRadius) + ", 0]) circle(r = " + formatNumber(t->minorRadius) +
+             ");";
+    }
+    return "";
+  }
+
+  void node(const Node& n, int indent) const {
+    const std::string pad(std::size_t(2 * indent), ' ');
+    switch (n.kind) {
+      case NodeKind::Primitive: out << pad << names.at(&n) << "();\n"; return;
+      case NodeKind::Complement:
+        out << pad << "difference() {\n"
+            << pad << "  " << bigBox(Mat3::Identity(), part.center(), Vec3::Constant(bigSize))
+            << "  // everything around the part\n";
+        node(*n.children.front(), indent + 1);
+        out << pad << "}\n";
+        return;
+      default:
+        out << pad << nodeKindName(n.kind) << "() {\n";
+        for (const NodePtr& c : n.children) node(*c, indent + 1);
+        out << pad << "}\n";
+    }
+  }
+};
+
+}  // namespace
+
+void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options) {
+  if (tree.empty()) throw std::invalid_argument("cannot export an empty tree");
+  Aabb part;
+  for (const Node* leaf : tree.leaves()) {
+    if (leaf->primitive.isBounded()) part.extend(leaf->primitive.bounds());
+  }
+  const Aabb solid = tree.bounds();
+  if (solid.isBounded()) part = part.isBounded() ? part.intersected(solid) : solid;
+  if (!part.isBounded() || part.isEmpty()) {
+    throw std::invalid_argument("the tree has no bounded primitive to size its half-spaces by");
+  }
+  const auto names = leafNames(tree);
+  Writer w{out, names, part, options.halfSpaceScale * std::max(part.diagonal(), 1e-9)};
+  out << "// CSG tree written by csgvox. Units are those of the scan.\n"
+      << "// Each primitive is a module below; the solid is the expression at the end.\n"
+      << "$fn = " << options.facets << ";\n\n";
+  std::set<const Node*> seen;
+  for (const Node* leaf : tree.leaves()) {
+    if (!seen.insert(leaf).second) continue;
+    out << "module " << names.at(leaf) << "() " << w.body(leaf->primitive) << "\n";
+  }
+  out << "\n";
+  w.node(*tree.root(), 0);
+}
+
+void writeScad(const std::filesystem::path& path, const CsgTree& tree,
+               const ScadOptions& options) {
+  writeFileAtomically(path, [&](std::ostream& out) { writeScad(out, tree, options); });
+}
+
+}  // namespace csgvox

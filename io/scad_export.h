@@ -1,0 +1,27 @@
+#pragma once
+/// tree.scad: the tree as an OpenSCAD program. Each primitive is a named
+/// module on its own line (the lines a designer edits), followed by the CSG
+/// expression over those modules. Half-spaces and complements become large
+/// boxes clipped to the part.
+
+#include "primitives/csg_tree.h"
+
+#include <filesystem>
+#include <iosfwd>
+
+namespace csgvox {
+
+/// Options of the OpenSCAD export.
+struct ScadOptions {
+  int facets = 64;              ///< $fn: segments of a full circle for curved primitives
+  double halfSpaceScale = 2.0;  ///< size of half-space boxes, multiple of the part's diagonal
+};
+
+/// Writes the OpenSCAD program. @throw std::invalid_argument for an empty tree
+/// or one whose bounded primitives give no extent for the half-space boxes.
+void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options = {});
+/// Writes tree.scad atomically. @throw IoError, std::invalid_argument.
+void writeScad(const std::filesystem::path& path, const CsgTree& tree,
+               const ScadOptions& options = {});
+
+}  // namespace csgvox

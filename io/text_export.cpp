@@ -1,0 +1,78 @@
+#include "io/text_export.h"
+
+#include "io/file_util.h"
+#include "io/tree_names.h"
+
+#include <ostream>
+#include <set>
+#include <sstream>
+
+namespace csgvox {
+namespace {
+
+std::string vec(const Vec3& v) { return formatVector(v); }
+
+std::string expression(const Node& node, const std::unordered_map<const Node*, std::string>& names) {
+  if (node.kind == NodeKind::Primitive) return names.at(&node);
+  std::string s(nodeKindName(node.kind));
+  s += "(";
+  for (std::size_t i = 0; i < node.children.size(); ++i) {
+    if (i) s += ", ";
+    s += expression(*node.children[i], names);
+  }
+  return s + ")";
+}
+
+std::string definition(const Primitive& p) {
+  std::ostringstream s;
+  s << primitiveTypeName(p.type()) << "(";
+  if (const auto* h = p.as<HalfSpace>()) {
+    s << "normal=" << vec(h->normal) << ", offset=" << formatNumber(h->offset);
+  } else if (const auto* b = p.as<Box>()) {
+    s << "center=" << vec(b->center) << ", half_size=" << vec(b->halfSize) << ", axes=";
+    if (b->axes.isIdentity(0.0)) {
+      s << "identity";
+    } else {
+      s << "[" << vec(b->axes.col(0)) << ", " << vec(b->axes.col(1)) << ", "
+        << vec(b->axes.col(2)) << "]";
+    }
+  } else if (const auto* c = p.as<Cylinder>()) {
+    s << "center=" << vec(c->center) << ", axis=" << vec(c->axis)
+      << ", radius=" << formatNumber(c->radius) << ", height=" << formatNumber(c->height);
+  } else if (const auto* c = p.as<Cone>()) {
+    s << "center=" << vec(c->center) << ", axis=" << vec(c->axis)
+      << ", radius_bottom=" << formatNumber(c->radiusBottom)
+      << ", radius_top=" << formatNumber(c->radiusTop) << ", height=" << formatNumber(c->height);
+  } else if (const auto* sp = p.as<Sphere>()) {
+    s << "center=" << vec(sp->center) << ", radius=" << formatNumber(sp->radius);
+  } else if (const auto* t = p.as<Torus>()) {
+    s << "center=" << vec(t->center) << ", axis=" << vec(t->axis)
+      << ", major_radius=" << formatNumber(t->majorRadius)
+      << ", minor_radius=" << formatNumber(t->minorRadius);
+  }
+  s << ")";
+  return s.str();
+}
+
+}  // namespace
+
+std::string treeExpression(const CsgTree& tree) {
+  if (tree.empty()) return "empty";
+  return expression(*tree.root(), leafNames(tree));
+}
+
+void writeTreeText(std::ostream& out, const CsgTree& tree) {
+  const auto names = leafNames(tree);
+  out << (tree.empty() ? std::string("empty") : expression(*tree.root(), names)) << "\n";
+  std::set<const Node*> seen;
+  for (const Node* leaf : tree.leaves()) {
+    if (!seen.insert(leaf).second) continue;
+    out << names.at(leaf) << " = " << definition(leaf->primitive) << "\n";
+  }
+}
+
+void writeTreeText(const std::filesystem::path& path, const CsgTree& tree) {
+  writeFileAtomically(path, [&](std::ostream& out) { writeTreeText(out, tree); });
+}
+
+}  // namespace csgvox

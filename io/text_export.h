@@ -1,0 +1,22 @@
+#pragma once
+/// tree.txt: the tree as one expression followed by one line per primitive,
+/// e.g.
+///   difference(union(base, boss), hole1)
+///   base = box(center=[0, 0, 5], half_size=[40, 30, 5], axes=identity)
+
+#include "primitives/csg_tree.h"
+
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+
+namespace csgvox {
+
+/// The expression alone, e.g. "difference(union(base, boss), hole1)".
+std::string treeExpression(const CsgTree& tree);
+/// Writes the expression and the primitive definitions.
+void writeTreeText(std::ostream& out, const CsgTree& tree);
+/// Writes tree.txt atomically. @throw IoError.
+void writeTreeText(const std::filesystem::path& path, const CsgTree& tree);
+
+}  // namespace csgvox

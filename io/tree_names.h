@@ -1,0 +1,21 @@
+#pragma once
+/// Stable, unique, identifier-safe names for the leaves of a tree, shared by
+/// the text and OpenSCAD exports.
+
+#include "primitives/csg_tree.h"
+
+#include <string>
+#include <unordered_map>
+
+namespace csgvox {
+
+/// Maps each leaf node to a unique identifier: its own name when it is a valid
+/// identifier (made unique with a suffix when repeated), else "<type><n>".
+std::unordered_map<const Node*, std::string> leafNames(const CsgTree& tree);
+
+/// Shortest decimal text that reads back to exactly `value`.
+std::string formatNumber(double value);
+/// "[x, y, z]" with formatNumber for each coordinate.
+std::string formatVector(const Vec3& v);
+
+}  // namespace csgvox
