@@ -185,10 +185,14 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
   LocalProblem pb;
   pb.universe = positions.size();
   pb.alpha = options.alpha;
-  pb.invL = result.actionCount ? 1.0 / double(result.actionCount) : 0.0;
   pb.inside = inside.gather(positions);
   pb.outside = pb.inside.complemented();
   pb.insideCount = pb.inside.count();
+  if (options.minFeatureVoxels > 0.0) {
+    pb.invL = options.minFeatureVoxels / double(std::max<std::size_t>(1, pb.insideCount));
+  } else {
+    pb.invL = result.actionCount ? 1.0 / double(result.actionCount) : 0.0;
+  }
   pb.outsideCount = pb.universe - pb.insideCount;
   // Useful actions: those removing at least one outside voxel; an action that
   // removes only inside voxels never belongs to an optimum. Actions with the

@@ -21,6 +21,10 @@ struct SubtreeAction {
 /// Options of selectSubtree.
 struct SubtreeOptions {
   double alpha = 0.9;                  ///< weight of the fit term of Eq. 4
+  /// Cost of one action. 0: Wu's 1/L, which depends on how many neighbours
+  /// the root has. > 0: this many voxels divided by |V+(root)|, so an action
+  /// pays off when it corrects about this many voxels, whatever L is.
+  double minFeatureVoxels = 8.0;
   std::uint64_t nodeBudget = 2'000'000;  ///< branch-and-bound nodes before falling back to local search
 };
 

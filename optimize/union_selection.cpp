@@ -122,8 +122,12 @@ UnionResult selectUnion(const VoxelSet& inside, const std::vector<const VoxelSet
   UnionResult result;
   Problem pb;
   pb.beta = options.beta;
-  pb.invM = candidates.empty() ? 0.0 : 1.0 / double(candidates.size());
   const std::size_t total = inside.count();
+  if (options.minFeatureVoxels > 0.0) {
+    pb.invM = options.minFeatureVoxels / double(std::max<std::size_t>(1, total));
+  } else {
+    pb.invM = candidates.empty() ? 0.0 : 1.0 / double(candidates.size());
+  }
   pb.invTotal = total ? 1.0 / double(total) : 0.0;
   // Work on the inside voxels only. Candidates covering nothing, or exactly
   // what an earlier one covers, never improve an optimum.

@@ -13,6 +13,9 @@ namespace csgvox {
 /// Options of selectUnion.
 struct UnionOptions {
   double beta = 0.9;                     ///< weight of the coverage term of Eq. 6
+  /// Cost of one candidate. 0: Wu's 1/M. > 0: this many voxels divided by
+  /// |V+(P)|, so a candidate pays off when it adds about this many voxels.
+  double minFeatureVoxels = 8.0;
   std::uint64_t nodeBudget = 200'000;  ///< branch-and-bound nodes before settling for local search
 };
 

@@ -51,6 +51,7 @@ TEST(SubtreeSelection, MatchesBruteForceOnRandomInstances) {
     for (double alpha : {0.9, 0.3}) {
       SubtreeOptions o;
       o.alpha = alpha;
+      o.minFeatureVoxels = 0.0;  // Wu's 1/L, as subtreeEnergy computes it
       const SubtreeResult r = selectSubtree(root, inside, nb, ids, o);
       const double brute = bruteForceSubtree(root, inside, nb, alpha);
       EXPECT_TRUE(r.provedOptimal);
@@ -84,7 +85,9 @@ TEST(SubtreeSelection, TruncatesABoxToTheInsideExactly) {
   for (int i = 0; i < 60; ++i) inside.set(i), a.set(i);
   for (int i = 60; i < 100; ++i) b.set(i);
   for (int i = 10; i < 20; ++i) c.set(i);
-  const SubtreeResult r = selectSubtree(root, inside, {&a, &b, &c}, {0, 1, 2});
+  SubtreeOptions o;
+  o.minFeatureVoxels = 0.0;
+  const SubtreeResult r = selectSubtree(root, inside, {&a, &b, &c}, {0, 1, 2}, o);
   ASSERT_EQ(r.actions.size(), 1u);  // one action suffices; two would cost more
   EXPECT_EQ(r.voxels, inside);
   EXPECT_TRUE(r.provedOptimal);
@@ -114,6 +117,7 @@ TEST(UnionSelection, MatchesBruteForceOnRandomInstances) {
     for (double beta : {0.9, 0.2}) {
       UnionOptions o;
       o.beta = beta;
+      o.minFeatureVoxels = 0.0;  // Wu's 1/M, as unionEnergy computes it
       const UnionResult r = selectUnion(inside, cands, o);
       EXPECT_TRUE(r.provedOptimal);
       EXPECT_NEAR(r.energy, bruteForceUnion(inside, cands, beta), 1e-12) << "trial " << trial;
@@ -133,6 +137,7 @@ TEST(UnionSelection, ScalesToHundredsOfCandidates) {
   std::vector<const VoxelSet*> cands;
   for (const VoxelSet& s : sets) cands.push_back(&s);
   UnionOptions o;
+  o.minFeatureVoxels = 0.0;
   o.nodeBudget = 20000;
   const UnionResult r = selectUnion(inside, cands, o);
   // Not necessarily proved optimal, but never worse than taking nothing or

@@ -1,0 +1,198 @@
+#include "optimize/csg_construction.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <map>
+
+namespace csgvox {
+namespace {
+
+// One operand of the final union: a root candidate with its truncation.
+struct Member {
+  std::uint32_t root = 0;
+  std::vector<SubtreeAction> actions;
+  VoxelSet voxels;
+};
+
+VoxelSet memberVoxels(const Member& m, std::span<const DescriptionSet> d,
+                      std::size_t skipAction = std::size_t(-1)) {
+  VoxelSet v = d[m.root].voxels;
+  for (std::size_t a = 0; a < m.actions.size(); ++a) {
+    if (a == skipAction) continue;
+    const VoxelSet& tool = d[m.actions[a].primitive].voxels;
+    if (m.actions[a].subtract) {
+      v.subtract(tool);
+    } else {
+      v &= tool;
+    }
+  }
+  return v;
+}
+
+VoxelSet unionVoxels(const std::vector<Member>& members, std::size_t size,
+                     std::size_t skip = std::size_t(-1)) {
+  VoxelSet v(size);
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    if (i != skip) v |= members[i].voxels;
+  }
+  return v;
+}
+
+CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates) {
+  std::vector<CsgTree> inter{candidates[m.root]};
+  std::vector<CsgTree> sub;
+  for (const SubtreeAction& a : m.actions) {
+    (a.subtract ? sub : inter).push_back(candidates[a.primitive]);
+  }
+  CsgTree t = inter.size() == 1 ? inter.front() : CsgTree::intersect(inter);
+  if (sub.empty()) return t;
+  sub.insert(sub.begin(), t);
+  return CsgTree::subtract(sub);
+}
+
+// Removes truncation actions and union members that change no voxel.
+void dropNoOps(std::vector<Member>& members, std::span<const DescriptionSet> d, std::size_t size) {
+  for (Member& m : members) {
+    for (std::size_t a = m.actions.size(); a-- > 0;) {
+      if (memberVoxels(m, d, a) == m.voxels) m.actions.erase(m.actions.begin() + long(a));
+    }
+  }
+  const VoxelSet all = unionVoxels(members, size);
+  // Try the smallest members first: they are the likeliest to be covered.
+  std::vector<std::size_t> order(members.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return members[a].voxels.count() < members[b].voxels.count();
+  });
+  std::vector<char> gone(members.size(), 0);
+  for (std::size_t i : order) {
+    VoxelSet rest(size);
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      if (j != i && !gone[j]) rest |= members[j].voxels;
+    }
+    if (rest == all) gone[i] = 1;
+  }
+  std::vector<Member> kept;
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    if (!gone[i]) kept.push_back(std::move(members[i]));
+  }
+  members = std::move(kept);
+}
+
+}  // namespace
+
+Construction constructCsg(std::span<const CsgTree> candidates,
+                          std::span<const DescriptionSet> d, const VoxelSet& inside,
+                          const ConstructOptions& options, const ProgressCallback& progress) {
+  Construction out;
+  const std::size_t n = candidates.size();
+  const std::size_t size = inside.size();
+  out.stats.candidates = n;
+  out.voxels = VoxelSet(size);
+  const auto clean = [&](std::size_t outside, std::size_t all) {
+    return double(outside) <= options.outsideTolerance * double(all);
+  };
+  // Roots (Wu §4.1).
+  std::vector<std::uint32_t> usable, truncate;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (d[i].plus == 0 || d[i].exceedsGrid) continue;
+    (clean(d[i].minus, d[i].voxels.count()) ? usable : truncate).push_back(i);
+  }
+  std::vector<VoxelSet> usablePlus;
+  for (std::uint32_t i : usable) usablePlus.push_back(d[i].voxels & inside);
+  std::erase_if(truncate, [&](std::uint32_t i) {
+    const VoxelSet plus = d[i].voxels & inside;
+    return std::any_of(usablePlus.begin(), usablePlus.end(),
+                       [&](const VoxelSet& p) { return p == plus; });
+  });
+  out.stats.usableRoots = usable.size();
+  out.stats.truncationRoots = truncate.size();
+
+  // Phase 1: a subtree per truncation root, in parallel.
+  std::vector<SubtreeResult> subtrees(truncate.size());
+  std::atomic<std::size_t> done{0};
+  std::atomic<bool> cancelled{false};
+  tbb::parallel_for(std::size_t(0), truncate.size(), [&](std::size_t r) {
+    if (cancelled) return;
+    const std::uint32_t j = truncate[r];
+    std::vector<const VoxelSet*> nb;
+    std::vector<std::uint32_t> ids;
+    for (std::uint32_t k = 0; k < n; ++k) {
+      if (k != j && VoxelSet::intersects(d[k].voxels, d[j].voxels)) {
+        nb.push_back(&d[k].voxels);
+        ids.push_back(k);
+      }
+    }
+    subtrees[r] = selectSubtree(d[j].voxels, inside, nb, ids, options.subtree);
+    const std::size_t finished = ++done;
+    if (progress && !progress(0.9 * double(finished) / double(truncate.size()), "subtrees")) {
+      cancelled = true;
+    }
+  });
+
+  // Phase 2 candidates: usable primitives and subtrees without outside voxels.
+  std::vector<Member> pool;
+  for (std::uint32_t i : usable) pool.push_back(Member{i, {}, d[i].voxels});
+  for (std::size_t r = 0; r < truncate.size(); ++r) {
+    if (!out.stats.provedOptimal || !subtrees[r].provedOptimal) out.stats.provedOptimal = false;
+    const VoxelSet& v = subtrees[r].voxels;
+    if (v.none() || !clean(VoxelSet::countAndNot(v, inside), v.count())) continue;
+    pool.push_back(Member{truncate[r], subtrees[r].actions, v});
+    ++out.stats.subtrees;
+  }
+  out.stats.unionCandidates = pool.size();
+  std::vector<const VoxelSet*> sets;
+  for (const Member& m : pool) sets.push_back(&m.voxels);
+  const UnionResult u = selectUnion(inside, sets, options.unionChoice);
+  if (!u.provedOptimal) out.stats.provedOptimal = false;
+  std::vector<Member> members;
+  for (std::uint32_t i : u.chosen) members.push_back(pool[i]);
+  if (progress) progress(0.95, "union");
+
+  if (options.simplify) dropNoOps(members, d, size);
+  out.stats.chosen = members.size();
+  out.voxels = unionVoxels(members, size);
+  if (members.empty()) return out;
+
+  // Subtractions shared by several members are applied once to the union
+  // when that leaves the voxels unchanged.
+  std::vector<std::uint32_t> lifted;
+  if (options.simplify) {
+    std::map<std::uint32_t, int> uses;
+    for (const Member& m : members) {
+      for (const SubtreeAction& a : m.actions) uses[a.primitive] += a.subtract ? 1 : 0;
+    }
+    for (const auto& [prim, count] : uses) {
+      if (count < 2) continue;
+      std::vector<Member> trial = members;
+      for (Member& m : trial) {
+        std::erase_if(m.actions, [&](const SubtreeAction& a) {
+          return a.subtract && a.primitive == prim;
+        });
+        m.voxels = memberVoxels(m, d);
+      }
+      VoxelSet v = unionVoxels(trial, size);
+      for (std::uint32_t l : lifted) v.subtract(d[l].voxels);
+      v.subtract(d[prim].voxels);
+      if (v == out.voxels) {
+        members = std::move(trial);
+        lifted.push_back(prim);
+      }
+    }
+  }
+  std::vector<CsgTree> parts;
+  for (const Member& m : members) parts.push_back(memberTree(m, candidates));
+  CsgTree tree = parts.size() == 1 ? parts.front() : CsgTree::unite(parts);
+  if (!lifted.empty()) {
+    std::vector<CsgTree> ops{tree};
+    for (std::uint32_t l : lifted) ops.push_back(candidates[l]);
+    tree = CsgTree::subtract(ops);
+  }
+  out.tree = tree;
+  if (progress) progress(1.0, "union");
+  return out;
+}
+
+}  // namespace csgvox

@@ -1,0 +1,51 @@
+#pragma once
+/// Wu et al. §4 end to end on voxels: roots, phase-1 subtrees, pruning,
+/// phase-2 union, and the simplified CSG tree.
+
+#include "optimize/subtree_selection.h"
+#include "optimize/union_selection.h"
+#include "primitives/csg_tree.h"
+#include "primitives/progress.h"
+#include "voxel/description_sets.h"
+
+#include <span>
+#include <vector>
+
+namespace csgvox {
+
+/// Options of constructCsg.
+struct ConstructOptions {
+  SubtreeOptions subtree;     ///< phase 1 (alpha, solver budget)
+  UnionOptions unionChoice;   ///< phase 2 (beta, solver budget)
+  bool simplify = true;       ///< drop no-op operations and lift shared subtractions
+  /// A candidate counts as free of outside voxels (Wu: |V−| = 0) when at most
+  /// this fraction of its voxels are labelled outside; absorbs labelling noise.
+  double outsideTolerance = 0.02;
+};
+
+/// Counts reported by constructCsg.
+struct ConstructStats {
+  std::size_t candidates = 0;      ///< primitive candidates given
+  std::size_t usableRoots = 0;     ///< RPr: no outside voxels, inside the grid
+  std::size_t truncationRoots = 0; ///< RPr': to be truncated (after removing duplicates of RPr)
+  std::size_t subtrees = 0;        ///< subtrees built in phase 1 with no outside voxels left
+  std::size_t unionCandidates = 0; ///< M: candidates of phase 2
+  std::size_t chosen = 0;          ///< candidates in the union
+  bool provedOptimal = true;       ///< every solve finished its branch and bound
+};
+
+/// Result of constructCsg.
+struct Construction {
+  CsgTree tree;      ///< the union of the chosen candidates (empty when none)
+  VoxelSet voxels;   ///< the tree's voxels as computed from the description sets
+  ConstructStats stats;
+};
+
+/// Builds a CSG tree from candidate solids and their descriptions on the
+/// labelled grid. `candidates[i]` is described by `descriptions[i]`.
+Construction constructCsg(std::span<const CsgTree> candidates,
+                          std::span<const DescriptionSet> descriptions, const VoxelSet& inside,
+                          const ConstructOptions& options = {},
+                          const ProgressCallback& progress = {});
+
+}  // namespace csgvox
