@@ -17,6 +17,8 @@ namespace {
 // nearest samples, the distance to each sample's tangent plane, growing into
 // the point distance once p projects more than one spacing away from the
 // sample. Exact on smooth regions; off by at most about a spacing near edges.
+// `nearestOut` receives the sample that gave the distance (whose tangent
+// plane holds p), so its normal is the surface normal seen from p.
 double surfaceDistance(const Vec3& p, const NearestNeighbors& index, const std::vector<Vec3>& pts,
                        const std::vector<Vec3>& normals, double spacing, std::uint32_t* nearestOut) {
   thread_local std::vector<std::uint32_t> near;
@@ -28,7 +30,11 @@ double surfaceDistance(const Vec3& p, const NearestNeighbors& index, const std::
     const Vec3 v = p - pts[i];
     const double along = normals[i].dot(v);
     const double lateral = std::max(0.0, (v - along * normals[i]).norm() - spacing);
-    best = std::min(best, std::sqrt(along * along + lateral * lateral));
+    const double d = std::sqrt(along * along + lateral * lateral);
+    if (d < best) {
+      best = d;
+      if (nearestOut) *nearestOut = i;
+    }
   }
   return best;
 }

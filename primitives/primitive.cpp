@@ -90,7 +90,9 @@ Sd2 convexSd2(double x, double y, const Segment2* segs, int count) {
     const double dist = std::hypot(vx, vy);
     if (dist < bestOut) {
       bestOut = dist;
-      if (dist > 0.0) {
+      // Within rounding of the edge the difference vector has no reliable
+      // direction: use the edge's normal (the limit of that direction).
+      if (dist > 1e-12 * (len + std::abs(x) + std::abs(y))) {
         gOutX = vx / dist;
         gOutY = vy / dist;
       } else {

@@ -1,0 +1,40 @@
+#pragma once
+/// Progress and timing lines on stderr for the command-line tool.
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+namespace csgvox::app {
+
+/// Prints "[  1.23 s] message" lines on stderr unless quiet.
+class Console {
+ public:
+  explicit Console(bool quiet) : quiet_(quiet), start_(std::chrono::steady_clock::now()) {}
+  /// Seconds since the console was created.
+  double elapsed() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  void info(const std::string& message) const {
+    if (!quiet_) std::fprintf(stderr, "[%7.2f s] %s\n", elapsed(), message.c_str());
+  }
+  bool quiet() const { return quiet_; }
+
+ private:
+  bool quiet_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// Wall-clock stopwatch for per-stage timings.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace csgvox::app

@@ -1,0 +1,28 @@
+#pragma once
+/// Normal estimation for scans that come without normals.
+
+#include "primitives/point_cloud.h"
+
+namespace csgvox {
+
+/// Estimates a unit outward normal for every point of `cloud`, replacing any
+/// normals it has:
+/// 1. a jet (quadric) fit to the point's `neighbors` nearest neighbours;
+/// 2. near sharp edges, where such a fit blends the two faces, the normal of
+///    the neighbour whose tangent plane holds most of the neighbourhood;
+/// 3. orientations propagated along a minimum spanning forest of the
+///    neighbour graph (Hoppe's method, with edges that cross the surface,
+///    e.g. through a thin wall, made expensive); pieces the graph does not
+///    connect are matched to the largest piece by their closest points;
+/// 4. all normals flipped if, at the scan's extreme points along ±x, ±y, ±z,
+///    they mostly point inwards.
+///
+/// Reliable for scans of closed surfaces sampled densely relative to their
+/// features; walls much thinner than the neighbourhood may still come out
+/// wrong. Deterministic for a given cloud; single-threaded (about 3 s per
+/// 100,000 points).
+/// @throw std::invalid_argument if `neighbors` < 6, if the cloud has no
+///        more than `neighbors` points, or if a point is not finite.
+void estimateNormals(PointCloud& cloud, int neighbors);
+
+}  // namespace csgvox

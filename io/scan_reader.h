@@ -1,0 +1,83 @@
+#pragma once
+/// Reading scans: point clouds (PLY, XYZ, XYZN) and meshes (PLY with faces,
+/// OFF, OBJ, STL) become points with unit outward normals. Normals missing
+/// from a point cloud are estimated; meshes are sampled by area.
+
+#include "primitives/point_cloud.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+
+namespace csgvox {
+
+/// Options of readScan.
+struct ReadOptions {
+  std::size_t meshSamples = 100000;  ///< points sampled from a mesh input, area-weighted (count)
+  std::uint64_t seed = 1;            ///< seed of the mesh sampling; same seed, same points
+  int normalNeighbors = 18;          ///< k nearest neighbours for estimating missing normals (count, >= 6)
+  std::size_t minPoints = 100;       ///< a scan with fewer points is rejected (count)
+};
+
+/// What readScan found in the file.
+struct ScanInfo {
+  /// Format that was read: "ply-ascii", "ply-binary-le", "ply-binary-be",
+  /// "xyz", "xyzn", "off-mesh", "obj-mesh", "stl-ascii-mesh",
+  /// "stl-binary-mesh", or a PLY format with "-mesh" appended.
+  std::string format;
+  bool fromMesh = false;          ///< the points were sampled from the faces of a mesh
+  std::size_t meshFaces = 0;      ///< faces in the mesh file as written (0 for a point cloud)
+  bool normalsEstimated = false;  ///< the file had no normals; they were estimated
+  std::size_t pointsRead = 0;     ///< points (for a mesh: vertices) read from the file
+};
+
+/// A scan read from a file.
+struct Scan {
+  PointCloud cloud;  ///< the points, each with a unit outward normal
+  ScanInfo info;     ///< how they were obtained
+};
+
+/// Kind of scan file; readScan(path) picks it from the file's extension.
+enum class ScanFileType {
+  Ply,  ///< .ply: a point cloud, or a mesh when it has a non-empty face element
+  Xyz,  ///< .xyz, .xyzn: "x y z" or "x y z nx ny nz" per line
+  Off,  ///< .off: a polygon mesh (ASCII; OFF, COFF, NOFF, STOFF, 4OFF)
+  Obj,  ///< .obj: a polygon mesh (only "v" and "f" lines matter)
+  Stl,  ///< .stl: a triangle mesh, ASCII or binary
+};
+
+/// Reads a scan from a file whose type is given by its extension
+/// (case-insensitive): .ply, .xyz, .xyzn, .off, .obj, .stl.
+///
+/// A point cloud keeps its points; given normals are normalised, missing
+/// normals are estimated (estimateNormals with options.normalNeighbors). A
+/// mesh yields options.meshSamples points drawn uniformly by area, each with
+/// the normal of its face, oriented outwards (consistently oriented soup,
+/// positive enclosed volume).
+/// @throw IoError "<path>: ..." when the file is missing, a directory,
+///        unreadable, or has an unsupported extension.
+/// @throw ParseError "<path>: ..." when the content is not a valid scan:
+///        empty, garbled or truncated, non-finite coordinates, zero-length
+///        normals, fewer than options.minPoints points, a mesh without faces
+///        or with zero area.
+/// @throw std::invalid_argument when options are invalid (normalNeighbors
+///        < 6, meshSamples < minPoints for a mesh).
+Scan readScan(const std::filesystem::path& path, const ReadOptions& options = {});
+
+/// Reads a scan of the given type from a stream opened in binary mode. The
+/// stream must be seekable (an std::ifstream or std::stringstream) and is
+/// read from position 0 to its end. `source` names the input in error
+/// messages. Otherwise as readScan(path).
+/// @throw ParseError "<source>: ..." for invalid content (as readScan(path)).
+/// @throw IoError when the stream cannot be read or is not seekable.
+/// @throw std::invalid_argument for invalid options.
+Scan readScan(std::istream& in, ScanFileType type, const std::string& source = "<stream>",
+              const ReadOptions& options = {});
+
+/// The scan file type named by the extension of `path` (case-insensitive).
+/// @throw IoError "<path>: unsupported scan file extension ..." otherwise.
+ScanFileType scanFileTypeFromPath(const std::filesystem::path& path);
+
+}  // namespace csgvox

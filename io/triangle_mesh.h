@@ -1,0 +1,69 @@
+#pragma once
+/// An indexed triangle mesh (the flat structure at the edge of the mesh
+/// exporter) with its measures, and mesh file I/O: PLY, STL and OBJ out;
+/// STL (ASCII and binary), OFF, OBJ and PLY in.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <iosfwd>
+#include <vector>
+
+#include "primitives/geometry.h"
+
+namespace csgvox {
+
+/// A triangle soup over shared vertices, in the scan's units. Triangles are
+/// counter-clockwise seen from outside, so that the normal
+/// (b - a) x (c - a) points out of the solid.
+struct TriangleMesh {
+  std::vector<Vec3> vertices;                           ///< vertex positions
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< vertex indices, counter-clockwise
+
+  /// Signed enclosed volume (divergence theorem); positive for a closed,
+  /// outward-oriented mesh. Meaningful only when isClosed().
+  double volume() const;
+  /// Total area of the triangles.
+  double area() const;
+  /// True when every edge is shared by exactly two triangles that use it in
+  /// opposite directions (a closed, consistently oriented surface). An empty
+  /// mesh is closed.
+  bool isClosed() const;
+  /// Axis-aligned bounds of the vertices (empty for an empty mesh).
+  Aabb bounds() const;
+};
+
+/// Writes `mesh` to `path` in the format named by the extension: `.ply`
+/// (binary little endian), `.stl` (binary) or `.obj` (case-insensitive). The
+/// file is replaced atomically.
+/// @throw IoError for another extension or when the file cannot be written.
+/// @throw std::invalid_argument when a triangle index is out of range.
+void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh);
+
+/// Writes `mesh` as binary little-endian PLY (float coordinates) to `out`,
+/// which must be opened in binary mode.
+/// @throw std::invalid_argument when a triangle index is out of range.
+void writeMeshPly(std::ostream& out, const TriangleMesh& mesh);
+
+/// Writes `mesh` as binary STL (float coordinates, one facet normal per
+/// triangle) to `out`, which must be opened in binary mode.
+/// @throw std::invalid_argument when a triangle index is out of range or the
+///        mesh has more than 2^32 - 1 triangles.
+void writeMeshStl(std::ostream& out, const TriangleMesh& mesh);
+
+/// Writes `mesh` as Wavefront OBJ text (shortest round-trip decimal
+/// coordinates, 1-based indices) to `out`.
+/// @throw std::invalid_argument when a triangle index is out of range.
+void writeMeshObj(std::ostream& out, const TriangleMesh& mesh);
+
+/// Reads a mesh from `.stl` (ASCII or binary), `.off`, `.obj` or `.ply`
+/// (ASCII or binary), chosen by the extension. Polygons with more than three
+/// corners are split into triangle fans. STL vertices with identical
+/// coordinates are merged, so a closed STL solid reads back closed.
+/// @throw IoError when the file is missing, unreadable or has another
+///        extension.
+/// @throw ParseError when the content is not a valid mesh (bad syntax, no
+///        triangles, index out of range, non-finite coordinate).
+TriangleMesh readMesh(const std::filesystem::path& path);
+
+}  // namespace csgvox

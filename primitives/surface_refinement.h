@@ -1,0 +1,115 @@
+#pragma once
+/// Surface refinement: nonlinear least squares of each detected surface on
+/// its inliers (orthogonal distance, robust loss), re-assignment of points to
+/// the surface that explains them best, and a final re-fit, so the surface
+/// parameters are as exact as the scan allows.
+
+#include "primitives/point_cloud.h"
+#include "primitives/surface.h"
+#include "primitives/surface_detection.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+namespace csgvox {
+
+/// Options of refineSurfaces and fitSurface.
+struct RefineOptions {
+  double lossScale = 1.0;         ///< Huber loss scale of the orthogonal distance, in units of the detection epsilon (ratio)
+  bool useNormals = true;         ///< also fit the scan normals, weighted by their estimated noise
+  int maxIterations = 50;         ///< Levenberg-Marquardt iterations per fit (count)
+  std::size_t maxFitPoints = 5000;  ///< larger inlier sets are fitted on an even subset of this many points (count)
+  bool reassign = true;           ///< re-assign points to the nearest compatible surface, then re-fit
+  bool removeRedundant = true;    ///< drop surfaces whose points other surfaces explain as well
+  double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least this share of its inliers (fraction)
+};
+
+/// Residual scales of one fit: each point contributes its orthogonal distance
+/// divided by `position` and, when `normal` > 0, the tangential part of its
+/// scan normal divided by the normal noise (see fitResidual2).
+struct FitScales {
+  double position = 1.0;  ///< position noise sigma, scan units (> 0)
+  double normal = 0.0;    ///< normal noise sigma, radians; 0 ignores the normals
+  double loss = 1.0;      ///< Huber scale of the orthogonal distance, scan units (> 0)
+};
+
+/// How well one point with scan normal n fits a surface, in the terms of
+/// fitSurface's model.
+struct PointFit {
+  double distance = 0.0;  ///< orthogonal distance to the surface, scan units
+  /// Squared components of n along the surface's principal tangent
+  /// directions, each divided by sqrt(normal^2 + (position x curvature)^2):
+  /// about chi-square with 2 degrees of freedom for a point on the surface.
+  double normal2 = 0.0;
+  double cosine = 1.0;    ///< cosine between n and the surface's oriented normal at p
+};
+
+/// Largest PointFit::normal2 of a point that lies on its surface: the 99.9 %
+/// quantile of chi-square with 2 degrees of freedom.
+inline constexpr double kNormalChi2 = 13.8;
+
+/// The residuals of point p with scan normal n on the surface.
+PointFit pointFit(const Surface& surface, const Vec3& p, const Vec3& n, const FitScales& scales);
+
+/// True when the point lies on the surface: within `epsilon` (scan units),
+/// its normal within the cosine `threshold` of the surface's oriented normal
+/// and, when scales.normal > 0, normal2 <= kNormalChi2.
+bool pointOnSurface(const Surface& surface, const Vec3& p, const Vec3& n, const FitScales& scales,
+                    double epsilon, double threshold);
+
+/// The scales refineSurfaces uses for the surfaces of a detection result:
+/// position from result.noise (at least 2 % of result.epsilon), normal from
+/// result.normalNoise (at least 0.02 rad; 0 when options.useNormals is
+/// false), loss options.lossScale x result.epsilon.
+FitScales fitScales(const DetectionResult& result, const RefineOptions& options = {});
+
+/// Fits `surface` (type and start parameters as given) to the points
+/// `indices` of the cloud: robust (Huber) least squares of their orthogonal
+/// distances and, optionally, of their normals' deviation. Unit vectors stay
+/// unit; the plane's orientation and the convexity flag are re-derived from
+/// the points' normals. Returns the RMS orthogonal distance of the points to
+/// the fitted surface, or a negative number (leaving `surface` unchanged)
+/// when the fit degenerates (for example a torus whose tube radius exceeds its
+/// ring radius). Does not change surface.inliers.
+/// @throw std::invalid_argument when scales.position or scales.loss is not
+///        positive or scales.normal is negative.
+double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices,
+                  Surface& surface, const FitScales& scales, const RefineOptions& options = {});
+
+/// A closed-form start for a surface of the given type on the points
+/// `indices` and their normals, to be polished with fitSurface: PCA plane;
+/// algebraic sphere; for surfaces of revolution the axis from the normals
+/// (perpendicular to a cylinder's, at a constant angle to a cone's, meeting a
+/// torus' normal lines), then a line or circle fit in the (height, radius)
+/// half-plane. Returns false when the points do not determine the surface.
+bool initialSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices,
+                    SurfaceType type, Surface& surface);
+
+/// The unit outward normal of the (unbounded) surface at p, oriented as its
+/// inliers: the plane's normal; for curved surfaces away from the axis,
+/// centre or tube centre when the surface is convex, towards it otherwise.
+Vec3 surfaceNormal(const Surface& surface, const Vec3& p);
+
+/// Assigns every point to the surface it fits best (smallest scaled squared
+/// distance plus PointFit::normal2) among those it lies on (pointOnSurface
+/// with fitScales(result), result.epsilon and result.normalThreshold), or to
+/// none;
+/// updates inliers, assignment, centroids and rms, and drops surfaces left
+/// with fewer than `minPoints` inliers (their points go to the next best
+/// surface). Surfaces keep their order.
+void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_t minPoints);
+
+/// Refines every surface of `result` on its inliers (fitSurface with
+/// fitScales), removes redundant surfaces (those whose points other surfaces
+/// explain as well: duplicates, or one surface spanning several true ones),
+/// re-assigns the points (reassignPoints), re-fits once and sets each
+/// surface's rms and centroid.
+/// Surfaces stay sorted by inlier count. A result without surfaces is left
+/// as it is.
+/// @throw std::invalid_argument when result.assignment does not match the
+///        cloud, or the cloud has no normals.
+void refineSurfaces(const PointCloud& cloud, DetectionResult& result,
+                    const RefineOptions& options = {});
+
+}  // namespace csgvox

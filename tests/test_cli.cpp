@@ -1,0 +1,218 @@
+// The csgvox executable as a user runs it: help, exit codes, one-line errors
+// naming the file, no partial outputs, and the sample/eval/render round trip
+// on every bundled part.
+
+#include "part_list.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace csgvox {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+RunResult run(const std::string& args, const fs::path& dir) {
+  const std::string cmd = std::string(CSGVOX_BINARY) + " " + args + " > '" +
+                          (dir / "stdout.txt").string() + "' 2> '" +
+                          (dir / "stderr.txt").string() + "' < /dev/null";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(dir / "stdout.txt");
+  r.err = slurp(dir / "stderr.txt");
+  return r;
+}
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary) << text;
+}
+
+std::string asciiPly(int n, const std::string& extraLine = "", bool normals = true) {
+  std::ostringstream s;
+  s << "ply\nformat ascii 1.0\nelement vertex " << n
+    << "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (normals) s << "property float nx\nproperty float ny\nproperty float nz\n";
+  s << "end_header\n";
+  for (int i = 0; i < n; ++i) {
+    const double a = 0.1 * i, z = 0.01 * i;
+    s << std::cos(a) << " " << std::sin(a) << " " << z;
+    if (normals) s << " " << std::cos(a) << " " << std::sin(a) << " 0";
+    s << "\n";
+  }
+  return s.str() + extraLine;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::freshTempDir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Expects exit code 1 and exactly one stderr line that names `file`.
+  void expectCleanError(const std::string& args, const std::string& file) {
+    const RunResult r = run(args, dir_);
+    EXPECT_EQ(r.code, 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_EQ(r.err.rfind("csgvox: error: ", 0), 0u) << r.err;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cli, HelpListsTheCommands) {
+  const RunResult r = run("--help", dir_);
+  EXPECT_EQ(r.code, 0);
+  for (const char* word : {"sample", "render", "eval", "--res", "--seed"}) {
+    EXPECT_NE(r.out.find(word), std::string::npos) << word;
+  }
+  for (const char* cmd : {"sample", "render", "eval"}) {
+    const RunResult c = run(std::string(cmd) + " --help", dir_);
+    EXPECT_EQ(c.code, 0) << cmd;
+    EXPECT_NE(c.out.find("TREE"), std::string::npos) << cmd;
+  }
+}
+
+TEST_F(Cli, BadUsageExitsWithTwo) {
+  EXPECT_EQ(run("", dir_).code, 2);
+  EXPECT_EQ(run("scan.ply --no-such-flag", dir_).code, 2);
+  EXPECT_EQ(run("scan.ply --res 0", dir_).code, 2);
+  EXPECT_EQ(run("scan.ply --res 100000", dir_).code, 2);
+  EXPECT_EQ(run("sample", dir_).code, 2);
+}
+
+TEST_F(Cli, BadScansGiveOneLineNamingTheFile) {
+  const fs::path missing = dir_ / "missing.ply";
+  expectCleanError("'" + missing.string() + "' -o '" + (dir_ / "out").string() + "'",
+                   missing.string());
+  fs::create_directories(dir_ / "adir.ply");
+  expectCleanError("'" + (dir_ / "adir.ply").string() + "'", (dir_ / "adir.ply").string());
+  const std::map<std::string, std::string> bad = {
+      {"empty.ply", ""},
+      {"header.ply", "plx\nformat ascii 1.0\nend_header\n"},
+      {"truncated.ply", asciiPly(500).substr(0, asciiPly(500).size() / 2)},
+      {"nan.ply", asciiPly(200) + ""},
+      {"few.ply", asciiPly(20)},
+      {"zeronormal.xyz", "0 0 0 0 0 0\n"},
+      {"garbage.xyz", "hello world\n"},
+      {"unknown.abc", "1 2 3\n"},
+  };
+  for (const auto& [name, text] : bad) {
+    std::string content = text;
+    if (name == "nan.ply") {
+      content = asciiPly(200);
+      content.replace(content.find("end_header\n") + 11, 1, "nan");
+    }
+    if (name == "zeronormal.xyz") {
+      std::ostringstream s;
+      for (int i = 0; i < 300; ++i) s << i << " " << i % 7 << " " << i % 11 << " 0 0 0\n";
+      content = s.str();
+    }
+    write(dir_ / name, content);
+    SCOPED_TRACE(name);
+    expectCleanError("'" + (dir_ / name).string() + "' -o '" + (dir_ / "out").string() + "'",
+                     (dir_ / name).string());
+    // Nothing is written for a scan that could not be read.
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
+  }
+}
+
+TEST_F(Cli, BadTreesGiveOneLineAndNoOutput) {
+  write(dir_ / "bad.json", "{\"root\": {\"type\": \"sphere\", \"radius\": -1, \"center\": [0,0,0]}}");
+  expectCleanError("sample '" + (dir_ / "bad.json").string() + "' -o '" +
+                       (dir_ / "s.ply").string() + "'",
+                   (dir_ / "bad.json").string());
+  EXPECT_FALSE(fs::exists(dir_ / "s.ply"));
+  write(dir_ / "notjson.json", "{ this is not json");
+  expectCleanError("render '" + (dir_ / "notjson.json").string() + "' -o '" +
+                       (dir_ / "m.ply").string() + "'",
+                   (dir_ / "notjson.json").string());
+  EXPECT_FALSE(fs::exists(dir_ / "m.ply"));
+}
+
+TEST_F(Cli, RenderRefusesUnknownFormatsAndOverwritingItsInput) {
+  const fs::path tree = test::dataDir() / test::partNames().front() / "tree.json";
+  fs::copy_file(tree, dir_ / "tree.json");
+  const std::string before = slurp(dir_ / "tree.json");
+  expectCleanError("render '" + (dir_ / "tree.json").string() + "' -o '" +
+                       (dir_ / "x.docx").string() + "'",
+                   (dir_ / "x.docx").string());
+  expectCleanError("render '" + (dir_ / "tree.json").string() + "' -o '" +
+                       (dir_ / "tree.json").string() + "'",
+                   (dir_ / "tree.json").string());
+  EXPECT_EQ(slurp(dir_ / "tree.json"), before);
+}
+
+TEST_F(Cli, MainJobDescribesTheScanAndWritesAReport) {
+  write(dir_ / "scan.ply", asciiPly(300));
+  const RunResult r = run("'" + (dir_ / "scan.ply").string() + "'", dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("300 points"), std::string::npos) << r.err;
+  const fs::path report = dir_ / "scan-csgvox" / "report.json";
+  ASSERT_TRUE(fs::exists(report));
+  const auto j = nlohmann::json::parse(slurp(report));
+  EXPECT_EQ(j["input"]["points"], 300);
+  EXPECT_EQ(j["input"]["normals"], "given");
+}
+
+// ---- sample → eval on every bundled part ----------------------------------
+
+class CliRoundTrip : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override { dir_ = test::freshTempDir("roundtrip-" + GetParam()); }
+  void TearDown() override { fs::remove_all(dir_); }
+  nlohmann::json evalOf(const std::string& scanArgs) {
+    const std::string tree = "'" + (test::dataDir() / GetParam() / "tree.json").string() + "'";
+    const fs::path scan = dir_ / "s.ply";
+    const RunResult s = run("sample " + tree + " -o '" + scan.string() + "' " + scanArgs, dir_);
+    EXPECT_EQ(s.code, 0) << s.err;
+    const RunResult e = run("eval " + tree + " '" + scan.string() + "' --json", dir_);
+    EXPECT_EQ(e.code, 0) << e.err;
+    return nlohmann::json::parse(e.out);
+  }
+  fs::path dir_;
+};
+
+TEST_P(CliRoundTrip, CleanSampleFitsExactly) {
+  const auto j = evalOf("--points 20000 --seed 11");
+  EXPECT_EQ(j["points"], 20000);
+  EXPECT_LT(j["rmse_relative"].get<double>(), 1e-7);
+  EXPECT_LT(j["surface_rmse_relative"].get<double>(), 5e-4);
+  EXPECT_DOUBLE_EQ(j["within_1pct"].get<double>(), 1.0);
+  EXPECT_GT(j["normal_agreement"].get<double>(), 0.99);
+}
+
+TEST_P(CliRoundTrip, NoisySampleErrorIsTheNoise) {
+  const double sigma = 0.005;
+  const auto j = evalOf("--points 20000 --seed 12 --noise " + std::to_string(sigma));
+  // Noise is relative to the tree's diagonal; eval reports relative to the
+  // (slightly larger, noisy) scan's diagonal.
+  EXPECT_NEAR(j["rmse_relative"].get<double>() / sigma, 1.0, 0.15);
+  EXPECT_NEAR(j["surface_rmse_relative"].get<double>() / sigma, 1.0, 0.15);
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledParts, CliRoundTrip, ::testing::ValuesIn(test::partNames()),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace csgvox

@@ -1,0 +1,124 @@
+// The OpenSCAD export: its text, and (when openscad is installed) that
+// OpenSCAD renders it to the same solid as the tree and as csgvox's mesh.
+
+#include "io/mesh_export.h"
+#include "io/mesh_solid.h"
+#include "io/scad_export.h"
+#include "io/tree_json.h"
+#include "io/triangle_mesh.h"
+#include "part_list.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace csgvox {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string scadText(const CsgTree& tree) {
+  std::ostringstream s;
+  writeScad(s, tree);
+  return s.str();
+}
+
+CsgTree plate() {
+  return CsgTree::subtract(
+      {CsgTree::leaf(Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)}, "plate"),
+       CsgTree::leaf(Cylinder{Vec3(30, 20, 2.5), Vec3::UnitZ(), 4, 7}, "hole"),
+       CsgTree::leaf(Cylinder{Vec3(-30, 20, 2.5), Vec3::UnitZ(), 4, 7}, "hole")});
+}
+
+TEST(ScadExport, OneNamedModulePerPrimitiveThenTheExpression) {
+  const std::string s = scadText(plate());
+  EXPECT_NE(s.find("module plate() translate([0, 0, 2.5]) cube([80, 60, 5], center = true);\n"),
+            std::string::npos)
+      << s;
+  EXPECT_NE(s.find("module hole() translate([30, 20, 2.5]) cylinder(h = 7, r = 4, center = true);"),
+            std::string::npos)
+      << s;
+  // A repeated name is made unique.
+  EXPECT_NE(s.find("module hole_1() translate([-30, 20, 2.5])"), std::string::npos) << s;
+  EXPECT_NE(s.find("difference() {\n  plate();\n  hole();\n  hole_1();\n}\n"), std::string::npos)
+      << s;
+}
+
+TEST(ScadExport, AxisAlignedBoxesWithPermutedAxesNeedNoRotation) {
+  Box b{Vec3(1, 2, 3), Mat3::Identity(), Vec3(1, 2, 3)};
+  b.axes.col(0) = Vec3(0, 1, 0);
+  b.axes.col(1) = Vec3(-1, 0, 0);
+  b.halfSize = Vec3(2, 1, 3);  // same solid as the identity box with (1, 2, 3)
+  const std::string s = scadText(CsgTree::leaf(b, "b"));
+  EXPECT_NE(s.find("module b() translate([1, 2, 3]) cube([2, 4, 6], center = true);"),
+            std::string::npos)
+      << s;
+}
+
+TEST(ScadExport, RejectsTreesWithoutExtent) {
+  std::ostringstream s;
+  EXPECT_THROW(writeScad(s, CsgTree()), std::invalid_argument);
+  EXPECT_THROW(writeScad(s, CsgTree::leaf(HalfSpace{})), std::invalid_argument);
+}
+
+// ---- OpenSCAD round trip ----------------------------------------------------
+
+bool haveOpenScad() { return std::system("openscad --version > /dev/null 2>&1") == 0; }
+
+// Fraction of agreement measured as IoU on random points in `box`.
+template <class InA, class InB>
+double iou(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int both = 0, either = 0;
+  for (int i = 0; i < samples; ++i) {
+    const Vec3 p = box.min + (box.max - box.min).cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+    const bool a = inA(p), b = inB(p);
+    both += a && b;
+    either += a || b;
+  }
+  return either ? double(both) / either : 1.0;
+}
+
+class ScadRendersTheSameSolid : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ScadRendersTheSameSolid, AsTheTreeAndItsMesh) {
+  if (!haveOpenScad()) {
+    GTEST_SKIP() << "openscad is not installed (scripts/install-deps.sh installs it); "
+                    "skipping the OpenSCAD round trip";
+  }
+  const std::string part = GetParam();
+  const CsgTree tree = readTreeJson(test::dataDir() / part / "tree.json");
+  const fs::path dir = test::freshTempDir("scad-" + part);
+  writeScad(dir / "tree.scad", tree);
+  const std::string cmd = "openscad -o '" + (dir / "openscad.stl").string() + "' '" +
+                          (dir / "tree.scad").string() + "' > '" + (dir / "log.txt").string() +
+                          "' 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << "openscad failed on " << part << ", see "
+                                         << (dir / "log.txt");
+  const TriangleMesh scadMesh = readMesh(dir / "openscad.stl");
+  const Aabb box = tree.bounds();
+  const double voxel = box.diagonal() / 400.0;
+  const MeshSolid scadSolid(scadMesh, voxel);
+  const MeshSolid renderSolid(meshTree(tree), voxel);
+  const auto inScad = [&](const Vec3& p) { return scadSolid.contains(p); };
+  const double vsTree =
+      iou(box, inScad, [&](const Vec3& p) { return tree.contains(p); }, 200000, 1);
+  const double vsRender =
+      iou(box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); }, 200000, 2);
+  EXPECT_GE(vsTree, 0.99) << part;
+  EXPECT_GE(vsRender, 0.99) << part;
+  RecordProperty("iou_vs_tree", std::to_string(vsTree));
+  RecordProperty("iou_vs_render", std::to_string(vsRender));
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledParts, ScadRendersTheSameSolid,
+                         ::testing::ValuesIn(test::partNames()),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace csgvox
