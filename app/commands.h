@@ -22,5 +22,6 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common);
 Command setupSample(CLI::App& app, CommonOptions& common);
 Command setupRender(CLI::App& app, CommonOptions& common);
 Command setupEval(CLI::App& app, CommonOptions& common);
+Command setupDetect(CLI::App& app, CommonOptions& common);
 
 }  // namespace csgvox::app

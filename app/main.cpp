@@ -17,6 +17,7 @@ constexpr const char* kDescription =
     "csgvox turns a 3D scan of a mechanical part into a compact, editable CSG tree.\n\n"
     "Usage:\n"
     "  csgvox SCAN [--res N] [-o OUTDIR] [--seed S] [--threads T] [--quiet]\n"
+    "  csgvox detect SCAN -o OUTDIR [--epsilon E] [--min-points M] [--res N] ...\n"
     "  csgvox sample TREE.json -o SCAN.ply [--points N] [--noise R] [--drop K] [--seed S]\n"
     "  csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]\n"
     "  csgvox eval TREE.json SCAN [--json]\n\n"
@@ -24,7 +25,7 @@ constexpr const char* kDescription =
     "stderr, results to files. Exit codes: 0 success, 1 bad input or failure, 2 bad usage.";
 
 bool isCommand(const char* arg) {
-  for (const char* c : {"sample", "render", "eval"}) {
+  for (const char* c : {"detect", "sample", "render", "eval"}) {
     if (std::strcmp(arg, c) == 0) return true;
   }
   return false;
@@ -49,6 +50,10 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[1], "sample") == 0) {
       cmd = cli.add_subcommand("sample", "Sample a synthetic scan on the surface of a CSG tree");
       run = app::setupSample(*cmd, common);
+    } else if (std::strcmp(argv[1], "detect") == 0) {
+      cmd = cli.add_subcommand("detect",
+                               "Detect surfaces and build the primitive hypotheses of a scan");
+      run = app::setupDetect(*cmd, common);
     } else if (std::strcmp(argv[1], "render") == 0) {
       cmd = cli.add_subcommand("render", "Export a CSG tree as a mesh, OpenSCAD, text or JSON");
       run = app::setupRender(*cmd, common);

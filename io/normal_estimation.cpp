@@ -376,7 +376,7 @@ void estimateNormals(PointCloud& cloud, int neighbors) {
   const Neighbourhoods hoods = findNeighbourhoods(points, k);
   sharpenAtEdges(points, normals, hoods);
   matchPieces(points, normals, orientAlongSpanningForest(points, normals, hoods));
-
+  orientOutwards(points, normals);
 
   cloud.normals.resize(n);
   for (std::size_t i = 0; i < n; ++i) {

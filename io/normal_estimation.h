@@ -19,7 +19,7 @@ namespace csgvox {
 ///
 /// Reliable for scans of closed surfaces sampled densely relative to their
 /// features; walls much thinner than the neighbourhood may still come out
-/// wrong. Deterministic for a given cloud; single-threaded (about 3 s per
+/// wrong. Deterministic for a given cloud; single-threaded (about 2 s per
 /// 100,000 points).
 /// @throw std::invalid_argument if `neighbors` < 6, if the cloud has no
 ///        more than `neighbors` points, or if a point is not finite.

@@ -19,6 +19,11 @@ CsgTree readTreeJson(const std::filesystem::path& path);
 /// Writes a tree as indented JSON; numbers round-trip exactly.
 /// @throw std::invalid_argument for an empty tree.
 void writeTreeJson(std::ostream& out, const CsgTree& tree);
+/// The JSON text of the tree's root node alone (a primitive object or an
+/// operation object, as inside "root"), for embedding in other documents.
+/// @throw std::invalid_argument for an empty tree.
+std::string treeNodeJson(const CsgTree& tree);
+
 /// Writes a tree.json file atomically. @throw IoError.
 void writeTreeJson(const std::filesystem::path& path, const CsgTree& tree);
 

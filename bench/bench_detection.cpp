@@ -1,0 +1,71 @@
+// Detection, refinement, regularisation and hypotheses on synthetic scans of a
+// bundled part at several sizes: time per stage and peak memory.
+// Run: build/bench/bench_detection [data/<part>/tree.json] [noise]
+
+#include "io/tree_json.h"
+#include "primitives/hypotheses.h"
+#include "primitives/regularization.h"
+#include "primitives/surface_detection.h"
+#include "primitives/surface_refinement.h"
+#include "primitives/surface_sampler.h"
+#include "voxel/voxel_grid.h"
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace {
+
+double seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+double peakMiB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace csgvox;
+  const std::string treePath =
+      argc > 1 ? argv[1] : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
+  const double noise = argc > 2 ? std::atof(argv[2]) : 0.0;
+  const CsgTree tree = readTreeJson(std::filesystem::path(treePath));
+  std::printf("part %s, noise %.4f D, %zu primitives\n", treePath.c_str(), noise,
+              tree.primitiveCount());
+  std::printf("%8s %9s %9s %9s %9s %9s %9s %8s %10s %9s\n", "points", "detect_s", "refine_s",
+              "regul_s", "hypoth_s", "total_s", "surfaces", "cands", "eq3", "peak_MiB");
+  for (std::size_t n : {50000u, 100000u, 500000u}) {
+    SampleOptions so;
+    so.points = n;
+    so.noise = noise;
+    so.seed = 1;
+    const PointCloud scan = sampleSurface(tree, so).cloud;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto t = t0;
+    DetectionResult det = detectSurfaces(scan);
+    const double detect = seconds(t);
+    t = std::chrono::steady_clock::now();
+    refineSurfaces(scan, det);
+    const double refine = seconds(t);
+    t = std::chrono::steady_clock::now();
+    regularizeSurfaces(det);
+    const double regularize = seconds(t);
+    t = std::chrono::steady_clock::now();
+    HypothesisOptions ho;
+    ho.voxelSize = 2.0 * minimalOrientedBox(scan.points).halfSize.maxCoeff() / 64.0;
+    const HypothesisSet hyp = generateHypotheses(scan, det.surfaces, ho);
+    const double hypotheses = seconds(t);
+    std::printf("%8zu %9.3f %9.3f %9.4f %9.3f %9.3f %9zu %8zu %10zu %9.0f\n", n, detect, refine,
+                regularize, hypotheses, seconds(t0), det.surfaces.size(), hyp.candidates.size(),
+                hyp.stats.cuboids.eq3Count, peakMiB());
+    std::fflush(stdout);
+  }
+  return 0;
+}
