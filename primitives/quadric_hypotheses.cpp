@@ -1,0 +1,468 @@
+// Quadric hypotheses (Wu et al. 2018 §3.2 and §4.1, Fayolle & Pasko 2016
+// §5.2): bounded cylinders, cone frustums, spheres and tori from their
+// patches; the additional box of each patch (minimal oriented bounding box,
+// or the maximal box of a quarter cylinder); the indirect candidates
+// box − quadric and box ∩ quadric; the separators. Also the CGAL oriented
+// bounding box used everywhere (this is the only file including CGAL).
+
+// CGAL's optimal bounding box needs its Eigen support; Eigen is linked already.
+#ifndef CGAL_EIGEN3_ENABLED
+#define CGAL_EIGEN3_ENABLED 1
+#endif
+
+#include "primitives/hypotheses_internal.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/optimal_bounding_box.h>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+
+namespace csgvox::hypotheses_detail {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Right-handed version of an orthonormal frame.
+Mat3 rightHanded(Mat3 f) {
+  if (f.determinant() < 0.0) f.col(2) = -f.col(2);
+  return f;
+}
+
+// Principal axes of the points (largest spread first).
+Mat3 principalFrame(std::span<const Vec3> points, Eigen::Vector3d* eigenvalues = nullptr) {
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& p : points) mean += p;
+  mean /= std::max<double>(1.0, static_cast<double>(points.size()));
+  Mat3 cov = Mat3::Zero();
+  for (const Vec3& p : points) cov += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
+  Mat3 f;
+  for (int k = 0; k < 3; ++k) f.col(k) = eig.eigenvectors().col(2 - k);
+  if (eigenvalues != nullptr) *eigenvalues = eig.eigenvalues().reverse();
+  return rightHanded(f);
+}
+
+// The box with axes `frame` around the points, with robust extents.
+Box boxAround(const Mat3& frame, std::span<const Vec3> points, double sigma) {
+  std::array<Range, 3> r;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> t;
+    t.reserve(points.size());
+    for (const Vec3& p : points) t.push_back(p.dot(frame.col(k)));
+    r[static_cast<std::size_t>(k)] = robustRange(std::move(t), sigma);
+  }
+  return boxFromRanges(frame, r);
+}
+
+// The point of the surface nearest to p (the inliers projected onto their
+// fitted surface bound the patch without the noise across it).
+Vec3 projectOnto(const SurfaceShape& shape, const Vec3& p) {
+  auto radialOf = [](const Vec3& d, const Vec3& axis) {
+    const Vec3 r = d - d.dot(axis) * axis;
+    const double n = r.norm();
+    return n > 0.0 ? Vec3(r / n) : frameFromAxis(axis).col(0);
+  };
+  if (const auto* c = std::get_if<CylinderSurface>(&shape)) {
+    const Vec3 a = c->axisDir.normalized(), d = p - c->axisPoint;
+    return c->axisPoint + d.dot(a) * a + c->radius * radialOf(d, a);
+  }
+  if (const auto* c = std::get_if<ConeSurface>(&shape)) {
+    const Vec3 a = c->axisDir.normalized(), d = p - c->apex;
+    const Vec3 g = std::cos(c->halfAngle) * a + std::sin(c->halfAngle) * radialOf(d, a);
+    return c->apex + std::max(0.0, d.dot(g)) * g;
+  }
+  if (const auto* c = std::get_if<SphereSurface>(&shape)) {
+    const Vec3 d = p - c->center;
+    return c->center + c->radius * (d.norm() > 0.0 ? Vec3(d.normalized()) : Vec3::UnitZ());
+  }
+  if (const auto* c = std::get_if<TorusSurface>(&shape)) {
+    const Vec3 a = c->axisDir.normalized();
+    const Vec3 tube = c->center + c->majorRadius * radialOf(p - c->center, a);
+    const Vec3 d = p - tube;
+    return tube + c->minorRadius * (d.norm() > 0.0 ? Vec3(d.normalized()) : a);
+  }
+  return p;
+}
+
+// A fitted quadric with its bounded primitive.
+struct Quadric {
+  std::size_t surface = 0;
+  Primitive primitive;
+  std::vector<Vec3> points;  // inliers projected onto the surface
+  double sigma = 0.0;
+  bool axial = false;             // cylinder, cone, torus: has an axis
+  Vec3 axis = Vec3::UnitZ();      // unit
+  Vec3 axisPoint = Vec3::Zero();  // origin of the axial coordinate t
+  Range extent;                   // of the inliers along the axis (t)
+};
+
+// The bounded primitive of a surface from its inliers; nullopt when the
+// parameters are degenerate.
+std::optional<Quadric> boundedQuadric(const Context& ctx, std::size_t index) {
+  const Surface& s = ctx.surfaces[index];
+  Quadric q;
+  q.surface = index;
+  q.points = inlierPoints(ctx.scan, s);
+  for (Vec3& p : q.points) p = projectOnto(s.shape, p);
+  q.sigma = s.rms;  // what is left: noise along the surface
+  const double minSize = 1e-6 * ctx.diagonal;
+  auto axialRange = [&](const Vec3& origin, const Vec3& axis) {
+    std::vector<double> t;
+    t.reserve(q.points.size());
+    for (const Vec3& p : q.points) t.push_back((p - origin).dot(axis));
+    q.axial = true;
+    q.axis = axis;
+    q.axisPoint = origin;
+    q.extent = robustRange(std::move(t), q.sigma);
+  };
+  if (const auto* c = s.as<CylinderSurface>()) {
+    if (!(c->radius > 0.0) || !(c->axisDir.norm() > 0.0)) return std::nullopt;
+    axialRange(c->axisPoint, c->axisDir.normalized());
+    if (!(q.extent.size() > minSize)) return std::nullopt;
+    q.primitive = Cylinder{q.axisPoint + 0.5 * (q.extent.lo + q.extent.hi) * q.axis, q.axis,
+                           c->radius, q.extent.size()};
+  } else if (const auto* c = s.as<ConeSurface>()) {
+    if (!(c->halfAngle > 0.0 && c->halfAngle < 0.5 * kPi) || !(c->axisDir.norm() > 0.0)) {
+      return std::nullopt;
+    }
+    axialRange(c->apex, c->axisDir.normalized());
+    q.extent.lo = std::max(q.extent.lo, 0.0);
+    if (!(q.extent.size() > minSize)) return std::nullopt;
+    const double tanA = std::tan(c->halfAngle);
+    q.primitive = Cone{q.axisPoint + 0.5 * (q.extent.lo + q.extent.hi) * q.axis, q.axis,
+                       q.extent.lo * tanA, q.extent.hi * tanA, q.extent.size()};
+  } else if (const auto* c = s.as<SphereSurface>()) {
+    if (!(c->radius > 0.0)) return std::nullopt;
+    q.primitive = Sphere{c->center, c->radius};
+  } else if (const auto* c = s.as<TorusSurface>()) {
+    if (!(c->minorRadius > 0.0 && c->minorRadius <= c->majorRadius) || !(c->axisDir.norm() > 0.0)) {
+      return std::nullopt;
+    }
+    axialRange(c->center, c->axisDir.normalized());
+    q.primitive = Torus{c->center, q.axis, c->majorRadius, c->minorRadius};
+  } else {
+    return std::nullopt;
+  }
+  return q;
+}
+
+// True when box a is the bounding box of the bounded quadric itself (then it
+// adds nothing: Wu drops it).
+bool isOwnBoundingBox(const Box& a, const Primitive& q, double tol, double cosTol) {
+  Vec3 center, axis = Vec3::Zero();
+  double along = 0.0, across = 0.0;  // half extents along and across the axis
+  if (const auto* c = q.as<Cylinder>()) {
+    center = c->center, axis = c->axis, along = 0.5 * c->height, across = c->radius;
+  } else if (const auto* c = q.as<Cone>()) {
+    center = c->center, axis = c->axis, along = 0.5 * c->height;
+    across = std::max(c->radiusBottom, c->radiusTop);
+  } else if (const auto* c = q.as<Torus>()) {
+    center = c->center, axis = c->axis, along = c->minorRadius;
+    across = c->majorRadius + c->minorRadius;
+  } else if (const auto* c = q.as<Sphere>()) {
+    center = c->center, along = across = c->radius;
+  } else {
+    return false;
+  }
+  if ((a.center - center).norm() > tol) return false;
+  int alongAxis = -1;
+  if (axis.squaredNorm() > 0.0) {
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(a.axes.col(k).dot(axis)) >= cosTol) alongAxis = k;
+    }
+    if (alongAxis < 0) return false;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double expected = k == alongAxis || alongAxis < 0 ? along : across;
+    if (std::abs(a.halfSize[k] - expected) > tol) return false;
+  }
+  return true;
+}
+
+// Angular span of the points around the cylinder axis: start angle and
+// coverage (2 pi minus the largest gap), in the frame frameFromAxis(axis).
+void angularSpan(const Quadric& q, double& start, double& coverage) {
+  const Mat3 f = frameFromAxis(q.axis);
+  std::vector<double> a;
+  a.reserve(q.points.size());
+  for (const Vec3& p : q.points) {
+    const Vec3 d = p - q.axisPoint;
+    a.push_back(std::atan2(d.dot(f.col(1)), d.dot(f.col(0))));
+  }
+  std::sort(a.begin(), a.end());
+  double gap = a.front() + 2.0 * kPi - a.back();
+  start = a.front();
+  for (std::size_t i = 1; i < a.size(); ++i) {
+    if (a[i] - a[i - 1] > gap) {
+      gap = a[i] - a[i - 1];
+      start = a[i];
+    }
+  }
+  coverage = 2.0 * kPi - gap;
+}
+
+// Wu Fig. 6(2): the maximal box of a quarter cylinder, a square of side r
+// with a corner on the axis, spanning the quarter.
+Box quarterBox(const Quadric& q, double radius, double start, double coverage) {
+  const Mat3 f = frameFromAxis(q.axis);
+  const double mid = start + 0.5 * coverage;
+  auto dir = [&](double ang) { return Vec3(std::cos(ang) * f.col(0) + std::sin(ang) * f.col(1)); };
+  Mat3 frame;
+  frame.col(0) = dir(mid - 0.25 * kPi);
+  frame.col(1) = dir(mid + 0.25 * kPi);
+  frame.col(2) = q.axis;  // e0 x e1 = axis: right-handed
+  const Vec3 origin = q.axisPoint;
+  const double o0 = origin.dot(frame.col(0)), o1 = origin.dot(frame.col(1)),
+               o2 = origin.dot(frame.col(2));
+  return boxFromRanges(frame, {Range{o0, o0 + radius}, Range{o1, o1 + radius},
+                               Range{o2 + q.extent.lo, o2 + q.extent.hi}});
+}
+
+// The minimal box of an axial patch with one axis on the quadric's axis: the
+// minimum-area rectangle of the points projected along the axis.
+Box axialMinimalBox(const Quadric& q) {
+  const Mat3 f = frameFromAxis(q.axis);
+  std::vector<Eigen::Vector2d> uv;
+  uv.reserve(q.points.size());
+  for (const Vec3& p : q.points) uv.emplace_back(p.dot(f.col(0)), p.dot(f.col(1)));
+  const Rectangle2 rect = minAreaRectangle(std::move(uv));
+  Mat3 frame;
+  frame.col(0) = rect.direction.x() * f.col(0) + rect.direction.y() * f.col(1);
+  frame.col(2) = q.axis;
+  frame.col(1) = q.axis.cross(frame.col(0));
+  return boxAround(frame, q.points, q.sigma);
+}
+
+// Plane surfaces as seen by the cap extension and the separator filter.
+struct PlaneInfo {
+  std::size_t surface = 0;
+  Vec3 normal = Vec3::UnitZ();
+  double offset = 0.0;
+  Vec3 centroid = Vec3::Zero();
+  std::vector<Vec3> sample;  // up to 512 inliers, evenly spread
+};
+
+std::vector<PlaneInfo> planeInfos(const Context& ctx) {
+  std::vector<PlaneInfo> planes;
+  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
+    const Surface& surface = ctx.surfaces[s];
+    const PlaneSurface* pl = surface.as<PlaneSurface>();
+    if (pl == nullptr || surface.inliers.size() < kMinInliers) continue;
+    PlaneInfo info;
+    info.surface = s;
+    info.normal = pl->normal.normalized();
+    info.offset = pl->offset / pl->normal.norm();
+    for (std::uint32_t i : surface.inliers) info.centroid += ctx.scan.points[i];
+    info.centroid /= static_cast<double>(surface.inliers.size());
+    const std::size_t step = std::max<std::size_t>(1, surface.inliers.size() / 512);
+    for (std::size_t i = 0; i < surface.inliers.size(); i += step) {
+      info.sample.push_back(ctx.scan.points[surface.inliers[i]]);
+    }
+    planes.push_back(std::move(info));
+  }
+  return planes;
+}
+
+// True when a cone or torus patch coaxial with the cylinder spans [t0, t1]
+// along its axis (within a voxel): the chamfer or round between its end and
+// a cap.
+bool bridged(const Context& ctx, const Quadric& cyl, double t0, double t1,
+             const std::vector<std::optional<Quadric>>& quadrics) {
+  return std::any_of(quadrics.begin(), quadrics.end(), [&](const std::optional<Quadric>& q) {
+    if (!q || !q->axial || q->primitive.type() == PrimitiveType::Cylinder) return false;
+    if (std::abs(q->axis.dot(cyl.axis)) < ctx.cosParallel) return false;
+    const Vec3 d = q->axisPoint - cyl.axisPoint;
+    if ((d - d.dot(cyl.axis) * cyl.axis).norm() > ctx.lengthTol) return false;  // not coaxial
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3& p : q->points) {
+      const double t = (p - cyl.axisPoint).dot(cyl.axis);
+      lo = std::min(lo, t), hi = std::max(hi, t);
+    }
+    return lo <= t0 + ctx.voxel && hi >= t1 - ctx.voxel;
+  });
+}
+
+// The plane patch that caps the cylinder past one end of its inliers, behind
+// a chamfer or round (the end face of a chamfered shaft or boss):
+// perpendicular to the axis, at most one radius past the end, with most of
+// its points inside the cylinder, and a coaxial cone or torus patch spanning
+// the gap. Returns the plane's axial position and surface, nearest first.
+std::optional<std::pair<double, std::size_t>> capPlane(
+    const Context& ctx, const Quadric& q, double radius, bool upper,
+    const std::vector<PlaneInfo>& planes, const std::vector<std::optional<Quadric>>& quadrics) {
+  std::optional<std::pair<double, std::size_t>> best;
+  const double end = upper ? q.extent.hi : q.extent.lo;
+  for (const PlaneInfo& pl : planes) {
+    if (std::abs(pl.normal.dot(q.axis)) < ctx.cosParallel) continue;
+    const double t = (pl.centroid - q.axisPoint).dot(q.axis);
+    const double gap = upper ? t - end : end - t;
+    if (!(gap > ctx.lengthTol && gap <= radius)) continue;
+    if (best && std::abs(t - end) >= std::abs(best->first - end)) continue;
+    std::size_t inside = 0;
+    for (const Vec3& p : pl.sample) {
+      const Vec3 d = p - q.axisPoint;
+      inside += (d - d.dot(q.axis) * q.axis).norm() <= radius + 0.5 * ctx.voxel;
+    }
+    if (2 * inside < pl.sample.size()) continue;
+    if (!bridged(ctx, q, std::min(t, end), std::max(t, end), quadrics)) continue;
+    best = std::make_pair(t, pl.surface);
+  }
+  return best;
+}
+
+// True when the plane n·x = offset is (within tolerance) one of the fitted planes.
+bool isFittedPlane(const Context& ctx, const Vec3& n, const Vec3& onPlane,
+                   const std::vector<PlaneInfo>& planes) {
+  return std::any_of(planes.begin(), planes.end(), [&](const PlaneInfo& pl) {
+    return std::abs(pl.normal.dot(n)) >= ctx.cosParallel &&
+           std::abs(pl.normal.dot(onPlane) - pl.offset) <= ctx.lengthTol;
+  });
+}
+
+Candidate makeCandidate(CsgTree tree, CandidateOrigin origin, std::vector<int> surfaces,
+                        double support) {
+  Candidate c;
+  c.tree = std::move(tree);
+  c.origin = origin;
+  std::sort(surfaces.begin(), surfaces.end());
+  c.surfaces = std::move(surfaces);
+  c.support = support;
+  return c;
+}
+
+}  // namespace
+
+Mat3 orientedBoundingFrame(std::span<const Vec3> points, std::uint32_t seed) {
+  Eigen::Vector3d ev;
+  const Mat3 pca = principalFrame(points, &ev);
+  // CGAL needs a full-dimensional set of at least four points.
+  if (points.size() < 4 || !(ev[2] > 1e-10 * ev[0])) return pca;
+  // The search runs on the convex hull, which for points sampled exactly on
+  // a convex surface holds nearly all of them: an even subset keeps it fast.
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  const std::size_t step = std::max<std::size_t>(1, (points.size() + 299) / 300);
+  std::vector<K::Point_3> cgalPoints;
+  cgalPoints.reserve(points.size() / step + 1);
+  for (std::size_t i = 0; i < points.size(); i += step) {
+    cgalPoints.emplace_back(points[i].x(), points[i].y(), points[i].z());
+  }
+  K::Aff_transformation_3 transform;
+  CGAL::oriented_bounding_box(cgalPoints, transform, CGAL::parameters::random_seed(seed));
+  // The transformation rotates the points into the box's axis-aligned frame:
+  // its rows are the box axes.
+  Mat3 frame;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) frame(j, i) = CGAL::to_double(transform.m(i, j));
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!(frame.col(k).norm() > 0.5)) return pca;
+    frame.col(k).normalize();
+  }
+  return rightHanded(frame);
+}
+
+std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& stats) {
+  std::vector<Candidate> out;
+  const std::vector<PlaneInfo> planes = planeInfos(ctx);
+  std::vector<std::optional<Quadric>> quadrics(ctx.surfaces.size());
+  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
+    const Surface& surface = ctx.surfaces[s];
+    if (surface.type() == SurfaceType::Plane) {
+      stats.skippedSurfaces += surface.inliers.size() < kMinInliers ? 1 : 0;
+      continue;
+    }
+    if (surface.inliers.size() >= kMinInliers) quadrics[s] = boundedQuadric(ctx, s);
+    if (!quadrics[s]) ++stats.skippedSurfaces;
+  }
+  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
+    if (!quadrics[s]) continue;
+    const Surface& surface = ctx.surfaces[s];
+    const Quadric& q = *quadrics[s];
+    const double support = static_cast<double>(surface.inliers.size());
+    const int index = static_cast<int>(s);
+    out.push_back(
+        makeCandidate(CsgTree::leaf(q.primitive), CandidateOrigin::Quadric, {index}, support));
+
+    // A cylinder extended to the cap plane beyond a chamfer.
+    if (const auto* cyl = q.primitive.as<Cylinder>(); cyl != nullptr && ctx.options.extendToCaps) {
+      const auto lower = capPlane(ctx, q, cyl->radius, false, planes, quadrics);
+      const auto upper = capPlane(ctx, q, cyl->radius, true, planes, quadrics);
+      if (lower || upper) {
+        const double lo = lower ? lower->first : q.extent.lo;
+        const double hi = upper ? upper->first : q.extent.hi;
+        std::vector<int> used{index};
+        if (lower) used.push_back(static_cast<int>(lower->second));
+        if (upper) used.push_back(static_cast<int>(upper->second));
+        out.push_back(makeCandidate(CsgTree::leaf(Cylinder{q.axisPoint + 0.5 * (lo + hi) * q.axis,
+                                                           q.axis, cyl->radius, hi - lo}),
+                                    CandidateOrigin::Quadric, std::move(used), support));
+        ++stats.extendedCylinders;
+      }
+    }
+
+    // Fayolle: a cylinder with the torus' major radius over the patch's extent.
+    if (const auto* torus = q.primitive.as<Torus>()) {
+      const double height =
+          q.extent.size() > 1e-6 * ctx.diagonal ? q.extent.size() : 2.0 * torus->minorRadius;
+      const double mid =
+          q.extent.size() > 1e-6 * ctx.diagonal ? 0.5 * (q.extent.lo + q.extent.hi) : 0.0;
+      out.push_back(makeCandidate(
+          CsgTree::leaf(Cylinder{q.axisPoint + mid * q.axis, q.axis, torus->majorRadius, height}),
+          CandidateOrigin::Separator, {index}, support));
+    }
+
+    // The additional box: the maximal box of a quarter cylinder, else the
+    // minimal oriented bounding box of the patch. For a patch of a surface of
+    // revolution that is the minimal box with one axis on the surface's axis
+    // (exact, by rotating calipers; CGAL's search on such patches finds boxes
+    // up to 3 % larger, and only on a wide full cone a tilted box 9 % smaller,
+    // which would hide that the box is the cone's own); for a sphere patch,
+    // CGAL's optimal oriented bounding box.
+    std::optional<Box> box;
+    if (const auto* cyl = q.primitive.as<Cylinder>()) {
+      double start = 0.0, coverage = 0.0;
+      angularSpan(q, start, coverage);
+      if (std::abs(coverage - 0.5 * kPi) <= ctx.options.quarterTolerance * kPi / 180.0) {
+        box = quarterBox(q, cyl->radius, start, coverage);
+        ++stats.quarterCylinders;
+      }
+    }
+    if (!box) {
+      box = q.axial
+                ? axialMinimalBox(q)
+                : boxAround(orientedBoundingFrame(q.points, ctx.options.seed), q.points, q.sigma);
+    }
+    if (!(box->halfSize.minCoeff() > 1e-6 * ctx.diagonal)) continue;
+    // Both boxes are estimated from the noisy patch: compare within its noise too.
+    if (isOwnBoundingBox(*box, q.primitive, ctx.lengthTol + 2.0 * q.sigma, ctx.cosParallel)) {
+      ++stats.ownBoundsDropped;
+      continue;
+    }
+    const CsgTree additional = CsgTree::leaf(*box);
+    const CsgTree quadric = CsgTree::leaf(q.primitive);
+    out.push_back(makeCandidate(additional, CandidateOrigin::Additional, {index}, support));
+    out.push_back(makeCandidate(CsgTree::subtract({additional, quadric}), CandidateOrigin::Indirect,
+                                {index}, support));
+    out.push_back(makeCandidate(CsgTree::intersect({additional, quadric}),
+                                CandidateOrigin::Indirect, {index}, support));
+    // Fayolle's separating planes: the faces of the box, bounding it, unless
+    // the plane was fitted already.
+    for (int k = 0; k < 3; ++k) {
+      for (double side : {1.0, -1.0}) {
+        const Vec3 n = side * box->axes.col(k);
+        const Vec3 face = box->center + box->halfSize[k] * n;
+        if (isFittedPlane(ctx, n, face, planes)) continue;
+        out.push_back(makeCandidate(CsgTree::leaf(HalfSpace{n, n.dot(face)}),
+                                    CandidateOrigin::Separator, {index}, support));
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace csgvox::hypotheses_detail
