@@ -25,7 +25,7 @@ struct SubtreeOptions {
   /// the root has. > 0: this many voxels divided by |V+(root)|, so an action
   /// pays off when it corrects about this many voxels, whatever L is.
   double minFeatureVoxels = 8.0;
-  std::uint64_t nodeBudget = 2'000'000;  ///< branch-and-bound nodes before falling back to local search
+  std::uint64_t nodeBudget = 20'000;  ///< branch-and-bound nodes before falling back to local search
 };
 
 /// Result of selectSubtree.

@@ -16,7 +16,7 @@ struct UnionOptions {
   /// Cost of one candidate. 0: Wu's 1/M. > 0: this many voxels divided by
   /// |V+(P)|, so a candidate pays off when it adds about this many voxels.
   double minFeatureVoxels = 8.0;
-  std::uint64_t nodeBudget = 200'000;  ///< branch-and-bound nodes before settling for local search
+  std::uint64_t nodeBudget = 50'000;  ///< branch-and-bound nodes before settling for local search
 };
 
 /// Result of selectUnion.

@@ -163,16 +163,33 @@ TEST_F(Cli, RenderRefusesUnknownFormatsAndOverwritingItsInput) {
   EXPECT_EQ(slurp(dir_ / "tree.json"), before);
 }
 
-TEST_F(Cli, MainJobDescribesTheScanAndWritesAReport) {
-  write(dir_ / "scan.ply", asciiPly(300));
-  const RunResult r = run("'" + (dir_ / "scan.ply").string() + "'", dir_);
+TEST_F(Cli, MainJobWritesTheTreeItsExportsAndAReport) {
+  fs::copy_file(test::dataDir() / "plate_holes" / "scan.ply", dir_ / "scan.ply");
+  const RunResult r = run("'" + (dir_ / "scan.ply").string() + "' --res 64 --seed 3", dir_);
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("300 points"), std::string::npos) << r.err;
-  const fs::path report = dir_ / "scan-csgvox" / "report.json";
-  ASSERT_TRUE(fs::exists(report));
-  const auto j = nlohmann::json::parse(slurp(report));
-  EXPECT_EQ(j["input"]["points"], 300);
-  EXPECT_EQ(j["input"]["normals"], "given");
+  EXPECT_NE(r.err.find("10000 points"), std::string::npos) << r.err;
+  const fs::path out = dir_ / "scan-csgvox";
+  for (const char* f : {"tree.json", "tree.scad", "tree.txt", "mesh.ply", "report.json"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  const auto j = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(j["status"], "ok");
+  EXPECT_EQ(j["input"]["points"], 10000);
+  EXPECT_LE(j["tree"]["primitives"].get<int>(), 5 + 2);
+  EXPECT_LT(j["metrics"]["chamfer_relative"].get<double>(), 0.005);
+  EXPECT_GT(j["metrics"]["within_1pct"].get<double>(), 0.99);
+  // The same seed gives the same tree.
+  const std::string first = slurp(out / "tree.json");
+  ASSERT_EQ(run("'" + (dir_ / "scan.ply").string() + "' --res 64 --seed 3 -q", dir_).code, 0);
+  EXPECT_EQ(slurp(out / "tree.json"), first);
+}
+
+TEST_F(Cli, MainJobRefusesAScanWithoutSurfaces) {
+  // A helix of points: no plane, cylinder, cone, sphere or torus explains it.
+  write(dir_ / "helix.ply", asciiPly(300));
+  expectCleanError("'" + (dir_ / "helix.ply").string() + "' -q -o '" + (dir_ / "out").string() + "'",
+                   (dir_ / "helix.ply").string());
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
 }
 
 // ---- sample → eval on every bundled part ----------------------------------
