@@ -123,6 +123,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     const std::vector<DescriptionSet> descriptions = describeAll(candidates, grid, labels);
     timings["description_sets"] = watch.seconds();
     watch = Stopwatch();
+    opt->construct.snapDistance = grid.voxelSize();
     const Construction built = constructCsg(candidates, descriptions, labels.inside,
                                             opt->construct);
     timings["optimisation"] = watch.seconds();

@@ -40,11 +40,64 @@ VoxelSet unionVoxels(const std::vector<Member>& members, std::size_t size,
   return v;
 }
 
-CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates) {
+// Corners of a solid's bounds: exact support points for a box, conservative
+// ones otherwise.
+std::vector<Vec3> supportCorners(const CsgTree& solid) {
+  std::vector<Vec3> corners;
+  const Node& root = *solid.root();
+  if (root.kind == NodeKind::Primitive) {
+    if (const Box* b = root.primitive.as<Box>()) {
+      for (int c = 0; c < 8; ++c) {
+        const Vec3 s((c & 1) ? 1 : -1, (c & 2) ? 1 : -1, (c & 4) ? 1 : -1);
+        corners.push_back(b->center + b->axes * s.cwiseProduct(b->halfSize));
+      }
+      return corners;
+    }
+  }
+  const Aabb a = solid.bounds();
+  if (!a.isBounded()) return corners;
+  for (int c = 0; c < 8; ++c) {
+    corners.emplace_back((c & 1) ? a.max.x() : a.min.x(), (c & 2) ? a.max.y() : a.min.y(),
+                         (c & 4) ? a.max.z() : a.min.z());
+  }
+  return corners;
+}
+
+// A subtracted box whose faces stop just short of the root's outer
+// boundary is grown through it (see ConstructOptions::snapDistance).
+CsgTree throughCut(const CsgTree& tool, const CsgTree& root, double snap) {
+  if (snap <= 0.0 || tool.root()->kind != NodeKind::Primitive) return tool;
+  const Box* b = tool.root()->primitive.as<Box>();
+  const std::vector<Vec3> corners = supportCorners(root);
+  if (!b || corners.empty()) return tool;
+  Box grown = *b;
+  bool changed = false;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double sign : {-1.0, 1.0}) {
+      const Vec3 dir = sign * b->axes.col(axis);
+      const double face = dir.dot(b->center) + b->halfSize[axis];
+      double reach = -1e300;
+      for (const Vec3& c : corners) reach = std::max(reach, dir.dot(c));
+      if (face <= reach && reach - face <= snap) {
+        const double extra = reach - face + 2.0 * snap;
+        grown.center += 0.5 * extra * dir;
+        grown.halfSize[axis] += 0.5 * extra;
+        changed = true;
+      }
+    }
+  }
+  return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
+}
+
+CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates, double snap) {
   std::vector<CsgTree> inter{candidates[m.root]};
   std::vector<CsgTree> sub;
   for (const SubtreeAction& a : m.actions) {
-    (a.subtract ? sub : inter).push_back(candidates[a.primitive]);
+    if (a.subtract) {
+      sub.push_back(throughCut(candidates[a.primitive], candidates[m.root], snap));
+    } else {
+      inter.push_back(candidates[a.primitive]);
+    }
   }
   CsgTree t = inter.size() == 1 ? inter.front() : CsgTree::intersect(inter);
   if (sub.empty()) return t;
@@ -183,7 +236,9 @@ Construction constructCsg(std::span<const CsgTree> candidates,
     }
   }
   std::vector<CsgTree> parts;
-  for (const Member& m : members) parts.push_back(memberTree(m, candidates));
+  for (const Member& m : members) {
+    parts.push_back(memberTree(m, candidates, options.snapDistance));
+  }
   CsgTree tree = parts.size() == 1 ? parts.front() : CsgTree::unite(parts);
   if (!lifted.empty()) {
     std::vector<CsgTree> ops{tree};

@@ -21,6 +21,10 @@ struct ConstructOptions {
   /// A candidate counts as free of outside voxels (Wu: |V−| = 0) when at most
   /// this fraction of its voxels are labelled outside; absorbs labelling noise.
   double outsideTolerance = 0.02;
+  /// Scan units (0: off). A face of a subtracted box that lies within this
+  /// distance inside the root's outer boundary is pushed out past it, so the
+  /// cut goes through instead of leaving a skin thinner than voxels can see.
+  double snapDistance = 0.0;
 };
 
 /// Counts reported by constructCsg.
