@@ -9,13 +9,16 @@
 #include <CGAL/property_map.h>
 #include <Eigen/Eigenvalues>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 
@@ -238,11 +241,15 @@ void validate(const PointCloud& cloud, const DetectOptions& o) {
 }
 
 // One RANSAC pass over the points `subset`; appends the accepted surfaces
-// (inliers as scan indices). Returns false when cancelled.
+// (inliers as scan indices), in detection order, after `accept` (model
+// selection) kept them. Each shape is final once RANSAC extracts it, so it is
+// converted and selected in a TBB task while RANSAC searches on; every task
+// writes its own slot, so the result does not depend on the scheduling.
+// Returns false when cancelled.
 bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subset,
                 const std::set<SurfaceType>& types, const Ransac::Parameters& params, unsigned int seed,
                 double diag, const std::function<bool(double)>& callback,
-                std::vector<Surface>& found) {
+                const std::function<bool(Surface&)>& accept, std::vector<Surface>& found) {
   if (subset.size() < params.min_points || subset.size() < 10) return true;
   PwnRange input;
   input.reserve(subset.size());
@@ -260,20 +267,50 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
   if (types.count(SurfaceType::Sphere)) ransac.add_shape_factory<CgalSphere>();
   if (types.count(SurfaceType::Torus)) ransac.add_shape_factory<CgalTorus>();
   ransac.preprocess();
-  bool cancelled = false;
-  ransac.detect(params, [&](double f) {
-    if (callback && !callback(f)) cancelled = true;
-    return !cancelled;
-  });
-  if (cancelled) return false;
-  for (const auto& shape : ransac.shapes()) {
-    Surface s;
-    for (std::size_t local : shape->indices_of_assigned_points()) {
-      s.inliers.push_back(std::get<2>(input[local]));
+  // Scan index of each (reordered) input point; preprocess() was the last reordering.
+  std::vector<std::uint32_t> scanIndex(input.size());
+  for (std::size_t k = 0; k < input.size(); ++k) scanIndex[k] = std::get<2>(input[k]);
+
+  // One slot per extracted shape; deque: slots stay put while tasks write them.
+  std::deque<std::optional<Surface>> slots;
+  tbb::task_group tasks;
+  const auto launch = [&]() {
+    const auto shapes = ransac.shapes();
+    std::size_t k = 0;
+    for (auto it = shapes.begin(); it != shapes.end(); ++it, ++k) {
+      if (k < slots.size()) continue;
+      std::optional<Surface>& slot = slots.emplace_back();
+      tasks.run([&, shape = *it, &slot = slot]() {
+        Surface s;
+        for (std::size_t local : shape->indices_of_assigned_points()) s.inliers.push_back(scanIndex[local]);
+        std::sort(s.inliers.begin(), s.inliers.end());
+        if (s.inliers.size() < params.min_points) return;
+        if (!convertShape(*shape, cloud, diag, s) || !accept(s)) return;
+        slot = std::move(s);
+      });
     }
-    std::sort(s.inliers.begin(), s.inliers.end());
-    if (s.inliers.size() < params.min_points) continue;
-    if (convertShape(*shape, cloud, diag, s)) found.push_back(std::move(s));
+  };
+  bool cancelled = false;
+  try {
+    ransac.detect(params, [&](double f) {
+      launch();
+      if (callback && !callback(f)) cancelled = true;
+      return !cancelled;
+    });
+  } catch (...) {
+    tasks.cancel();
+    tasks.wait();
+    throw;
+  }
+  if (cancelled) {
+    tasks.cancel();
+    tasks.wait();
+    return false;
+  }
+  launch();
+  tasks.wait();
+  for (std::optional<Surface>& slot : slots) {
+    if (slot) found.push_back(std::move(*slot));
   }
   return true;
 }
@@ -429,10 +466,12 @@ std::string_view detectionStatusName(DetectionResult::Status status) {
   return "unknown";
 }
 
-double estimateNoise(const PointCloud& cloud, int neighbors) {
+namespace {
+
+// The estimators below on a prebuilt neighbour structure of the cloud's points.
+double estimateNoise(const PointCloud& cloud, const NearestNeighbors& nn, int neighbors) {
   std::size_t k = std::size_t(std::max(neighbors, 4));
   if (cloud.size() < k + 1) return 0.0;
-  const NearestNeighbors nn(cloud.points);
   const std::vector<std::uint32_t> sample = strideSubset(cloud.size(), 4000);
   // Residual RMS of m points around a fitted plane (3 parameters): sigma^2 *
   // chi^2(m-3) / m; divide by the chi^2 median (Wilson-Hilferty).
@@ -463,9 +502,8 @@ double estimateNoise(const PointCloud& cloud, int neighbors) {
   return sigma;
 }
 
-double estimateNormalNoise(const PointCloud& cloud) {
+double estimateNormalNoise(const PointCloud& cloud, const NearestNeighbors& nn) {
   if (cloud.size() < 2 || !cloud.hasNormals()) return 0.0;
-  const NearestNeighbors nn(cloud.points);
   const std::vector<std::uint32_t> sample = strideSubset(cloud.size(), 4000);
   std::vector<double> angle(sample.size());
   tbb::parallel_for(std::size_t(0), sample.size(), [&](std::size_t s) {
@@ -478,9 +516,8 @@ double estimateNormalNoise(const PointCloud& cloud) {
   return median(std::move(angle)) / std::numbers::sqrt2;
 }
 
-double estimateSpacing(const PointCloud& cloud) {
+double estimateSpacing(const PointCloud& cloud, const NearestNeighbors& nn) {
   if (cloud.size() < 2) return 0.0;
-  const NearestNeighbors nn(cloud.points);
   const std::vector<std::uint32_t> sample = strideSubset(cloud.size(), 4000);
   std::vector<double> dist(sample.size());
   tbb::parallel_for(std::size_t(0), sample.size(), [&](std::size_t s) {
@@ -490,6 +527,23 @@ double estimateSpacing(const PointCloud& cloud) {
     dist[s] = d2.size() == 2 ? std::sqrt(d2[1]) : 0.0;
   });
   return median(std::move(dist));
+}
+
+}  // namespace
+
+double estimateNoise(const PointCloud& cloud, int neighbors) {
+  if (cloud.size() < std::size_t(std::max(neighbors, 4)) + 1) return 0.0;
+  return estimateNoise(cloud, NearestNeighbors(cloud.points), neighbors);
+}
+
+double estimateNormalNoise(const PointCloud& cloud) {
+  if (cloud.size() < 2 || !cloud.hasNormals()) return 0.0;
+  return estimateNormalNoise(cloud, NearestNeighbors(cloud.points));
+}
+
+double estimateSpacing(const PointCloud& cloud) {
+  if (cloud.size() < 2) return 0.0;
+  return estimateSpacing(cloud, NearestNeighbors(cloud.points));
 }
 
 DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& options,
@@ -519,9 +573,10 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
 
   // Scale-free parameters: relative to D, raised to what the noise and the
   // sampling density require.
-  result.noise = estimateNoise(cloud);
-  result.normalNoise = estimateNormalNoise(cloud);
-  const double spacing = estimateSpacing(cloud);
+  const NearestNeighbors nn(cloud.points);
+  result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
+  result.normalNoise = estimateNormalNoise(cloud, nn);
+  const double spacing = estimateSpacing(cloud, nn);
   result.epsilon = std::max(options.epsilon * diag,
                             std::min(options.noiseFactor * result.noise, options.maxEpsilon * diag));
   result.clusterEpsilon =
@@ -579,22 +634,13 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     params.normal_threshold = options.normalThreshold;
     const double span = 0.9 / double(stages.size()), base = 0.05 + span * double(stage);
     const std::function<bool(double)> cb = [&](double f) { return report(base + span * f, "ransac"); };
-    const std::size_t before = found.size();
+    const std::function<bool(Surface&)> accept = [&](Surface& surf) {
+      return selectModel(cloud, options, scales, result.epsilon, diag, surf);
+    };
     if (!ransacPass(cloud, subset, stages[stage].types, params, mixSeed(options.seed, int(stage)),
-                    diag, cb, found)) {
+                    diag, cb, accept, found)) {
       return cancelled();
     }
-    std::vector<char> keep(found.size(), 1);
-    tbb::parallel_for(before, found.size(), [&](std::size_t s) {
-      keep[s] = selectModel(cloud, options, scales, result.epsilon, diag, found[s]);
-    });
-    std::size_t k = before;
-    for (std::size_t s = before; s < found.size(); ++s) {
-      if (!keep[s]) continue;
-      if (k != s) found[k] = std::move(found[s]);
-      ++k;
-    }
-    found.resize(k);
     if (stage == 0) {
       // Measure the normal noise on the first surfaces, and use it from now on.
       if (const double sn = normalNoiseOnSurfaces(cloud, found); sn >= 0.0) {

@@ -6,7 +6,9 @@
 #include <ceres/solver.h>
 #include <ceres/sphere_manifold.h>
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cmath>
@@ -776,11 +778,17 @@ namespace {
 // degenerates keep their parameters.
 void fitAll(const PointCloud& cloud, DetectionResult& result, const RefineOptions& options) {
   const FitScales scales = fitScales(result, options);
-  tbb::parallel_for(std::size_t(0), result.surfaces.size(), [&](std::size_t s) {
-    Surface& surf = result.surfaces[s];
-    Surface trial = surf;
-    if (fitSurface(cloud, surf.inliers, trial, scales, options) >= 0.0) surf = std::move(trial);
-  });
+  // One task per surface: the fits differ widely in cost (largest surfaces first).
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, result.surfaces.size(), 1),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t s = range.begin(); s != range.end(); ++s) {
+          Surface& surf = result.surfaces[s];
+          Surface trial = surf;
+          if (fitSurface(cloud, surf.inliers, trial, scales, options) >= 0.0) surf = std::move(trial);
+        }
+      },
+      tbb::simple_partitioner());
 }
 
 // Removes surfaces whose inliers other surfaces explain: a duplicate, a
@@ -814,19 +822,42 @@ void removeRedundant(const PointCloud& cloud, DetectionResult& result, const Ref
     }
     return std::pow(fit.distance / scales.position, 2) + fit.normal2;
   };
+  // The scores of every inlier on its own surface and on every other surface
+  // that explains it (below the cap), computed once in parallel over the
+  // points; the surfaces do not change below, so each round only looks them up.
+  std::vector<std::size_t> first(surfaces.size() + 1, 0);
+  for (std::size_t s = 0; s < surfaces.size(); ++s) first[s + 1] = first[s] + surfaces[s].inliers.size();
+  std::vector<std::uint32_t> owner(first.back());
+  for (std::size_t s = 0; s < surfaces.size(); ++s) {
+    std::fill(owner.begin() + std::ptrdiff_t(first[s]), owner.begin() + std::ptrdiff_t(first[s + 1]),
+              std::uint32_t(s));
+  }
+  using Entry = std::pair<std::uint32_t, double>;  // surface, score
+  std::vector<std::vector<Entry>> near(first.back());
+  tbb::parallel_for(std::size_t(0), first.back(), [&](std::size_t k) {
+    const std::uint32_t i = surfaces[owner[k]].inliers[k - first[owner[k]]];
+    for (std::size_t t = 0; t < surfaces.size(); ++t) {
+      const double v = score(t, i);
+      if (v < cap || t == owner[k]) near[k].emplace_back(std::uint32_t(t), v);
+    }
+  });
   while (true) {
     std::vector<double> excess(surfaces.size(), -1e300);
     tbb::parallel_for(std::size_t(0), surfaces.size(), [&](std::size_t s) {
       if (!alive[s] || surfaces[s].inliers.empty()) return;
       std::size_t explained = 0;
       double sum = 0.0;
-      for (std::uint32_t i : surfaces[s].inliers) {
-        double other = cap;
-        for (std::size_t t = 0; t < surfaces.size(); ++t) {
-          if (t != s && alive[t]) other = std::min(other, score(t, i));
-        }
+      for (std::size_t k = first[s]; k < first[s + 1]; ++k) {
+        double self = cap, other = cap;
+        for (const auto& [t, v] : near[k]) {
+          if (t == s) {
+            self = v;
+          } else if (alive[t]) {
+            other = std::min(other, v);
+          }
+        }  // surfaces missing from near[k] score the cap
         explained += other < cap;
-        sum += score(s, i) - other;
+        sum += self - other;
       }
       // Redundant: others explain most of its points, and about as well.
       const double mean = sum / double(surfaces[s].inliers.size());
