@@ -224,12 +224,19 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return score[a] > score[b];
   });
-  LocalProblem sorted = pb;
-  for (std::size_t a = 0; a < order.size(); ++a) {
-    sorted.removes[a] = pb.removes[order[a]];
-    sorted.removesOut[a] = pb.removesOut[order[a]];
-    sorted.removesIn[a] = pb.removesIn[order[a]];
-    sorted.actionIndex[a] = pb.actionIndex[order[a]];
+  LocalProblem sorted;
+  sorted.universe = pb.universe;
+  sorted.inside = std::move(pb.inside);
+  sorted.outside = std::move(pb.outside);
+  sorted.insideCount = pb.insideCount;
+  sorted.outsideCount = pb.outsideCount;
+  sorted.invL = pb.invL;
+  sorted.alpha = pb.alpha;
+  for (std::size_t a : order) {
+    sorted.removes.push_back(std::move(pb.removes[a]));
+    sorted.removesOut.push_back(std::move(pb.removesOut[a]));
+    sorted.removesIn.push_back(std::move(pb.removesIn[a]));
+    sorted.actionIndex.push_back(pb.actionIndex[a]);
   }
 
   std::vector<std::uint8_t> best;

@@ -150,10 +150,14 @@ UnionResult selectUnion(const VoxelSet& inside, const std::vector<const VoxelSet
   for (std::size_t i = 0; i < order.size(); ++i) sizes[i] = pb.covers[i].count();
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return sizes[a] > sizes[b]; });
-  Problem sorted = pb;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    sorted.covers[i] = pb.covers[order[i]];
-    sorted.ids[i] = pb.ids[order[i]];
+  Problem sorted;
+  sorted.inside = pb.inside;
+  sorted.invM = pb.invM;
+  sorted.beta = pb.beta;
+  sorted.invTotal = pb.invTotal;
+  for (std::size_t i : order) {
+    sorted.covers.push_back(std::move(pb.covers[i]));
+    sorted.ids.push_back(pb.ids[i]);
   }
   // Incumbent: greedy descent, then restarts.
   std::vector<std::uint8_t> best(sorted.covers.size(), 0);

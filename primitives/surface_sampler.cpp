@@ -200,14 +200,12 @@ SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
       const double len = g.norm();
       if (!(len > 0.5)) return;  // on an edge or an axis: no well-defined normal
       const Vec3 n = -g / len;  // the primitive's outward normal
-      const bool outsideAhead = tree.value(c.point + step * n) < 0.0;
-      const bool insideBehind = tree.value(c.point - step * n) > 0.0;
-      const bool insideAhead = tree.value(c.point + step * n) > 0.0;
-      const bool outsideBehind = tree.value(c.point - step * n) < 0.0;
-      if (outsideAhead && insideBehind) {
+      const double ahead = tree.value(c.point + step * n);
+      const double behind = tree.value(c.point - step * n);
+      if (ahead < 0.0 && behind > 0.0) {
         c.normal = n;
         c.accepted = true;
-      } else if (insideAhead && outsideBehind) {
+      } else if (ahead > 0.0 && behind < 0.0) {
         c.normal = -n;  // a subtracted primitive: the solid lies outside it
         c.accepted = true;
       }

@@ -141,9 +141,16 @@ TEST(UnionSelection, ScalesToHundredsOfCandidates) {
   o.nodeBudget = 20000;
   const UnionResult r = selectUnion(inside, cands, o);
   // Not necessarily proved optimal, but never worse than taking nothing or
-  // taking the single best candidate.
-  std::vector<std::uint8_t> none(cands.size(), 0);
-  EXPECT_LE(r.energy, unionEnergy(inside, cands, none, o.beta));
+  // taking the single best candidate, and the reported energy is the choice's.
+  std::vector<std::uint8_t> z(cands.size(), 0);
+  EXPECT_LE(r.energy, unionEnergy(inside, cands, z, o.beta));
+  for (std::size_t i = 0; i < cands.size(); ++i) {
+    z[i] = 1;
+    EXPECT_LE(r.energy, unionEnergy(inside, cands, z, o.beta) + 1e-12) << i;
+    z[i] = 0;
+  }
+  for (std::uint32_t i : r.chosen) z[i] = 1;
+  EXPECT_NEAR(unionEnergy(inside, cands, z, o.beta), r.energy, 1e-12);
   EXPECT_GT(r.covered, 0u);
   EXPECT_FALSE(r.chosen.empty());
 }

@@ -83,7 +83,7 @@ class Cli : public ::testing::Test {
 TEST_F(Cli, HelpListsTheCommands) {
   const RunResult r = run("--help", dir_);
   EXPECT_EQ(r.code, 0);
-  for (const char* word : {"sample", "render", "eval", "--res", "--seed"}) {
+  for (const char* word : {"detect", "sample", "render", "eval", "--res", "--seed"}) {
     EXPECT_NE(r.out.find(word), std::string::npos) << word;
   }
   for (const char* cmd : {"sample", "render", "eval"}) {
@@ -91,6 +91,9 @@ TEST_F(Cli, HelpListsTheCommands) {
     EXPECT_EQ(c.code, 0) << cmd;
     EXPECT_NE(c.out.find("TREE"), std::string::npos) << cmd;
   }
+  const RunResult d = run("detect --help", dir_);
+  EXPECT_EQ(d.code, 0);
+  EXPECT_NE(d.out.find("--epsilon"), std::string::npos);
 }
 
 TEST_F(Cli, BadUsageExitsWithTwo) {
