@@ -11,15 +11,9 @@
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
+#include "pipeline/reconstruct.h"
 #include "io/triangle_mesh.h"
-#include "optimize/csg_construction.h"
 #include "primitives/fit_metrics.h"
-#include "primitives/hypotheses.h"
-#include "primitives/regularization.h"
-#include "primitives/surface_detection.h"
-#include "primitives/surface_refinement.h"
-#include "voxel/description_sets.h"
-#include "voxel/labeling.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -30,14 +24,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct ReconstructOptions {
+struct CommandOptions {
   std::string scan;
   std::string outDir;
   int resolution = 64;
   std::uint64_t seed = 1;
   std::string labelMethod = "winding";
-  LabelOptions labels;
-  ConstructOptions construct;
+  ReconstructOptions pipeline;
   int meshResolution = 160;
 };
 
@@ -50,7 +43,7 @@ std::string fmt(const char* format, double a, double b = 0.0) {
 }  // namespace
 
 Command setupReconstruct(CLI::App& app, CommonOptions& common) {
-  auto opt = std::make_shared<ReconstructOptions>();
+  auto opt = std::make_shared<CommandOptions>();
   app.add_option("SCAN", opt->scan,
                  "Scan to reconstruct: PLY, XYZ, XYZN point cloud, or OFF/OBJ/STL/PLY mesh")
       ->required();
@@ -63,15 +56,19 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                  "Voxel labelling: winding (generalised winding number) or vote (Wu's K-nearest "
                  "normal vote)")
       ->check(CLI::IsMember({"winding", "vote"}));
-  app.add_option("-K,--neighbors", opt->labels.neighbors, "vote: nearest points per voxel")
+  app.add_option("-K,--neighbors", opt->pipeline.labels.neighbors, "vote: nearest points per voxel")
       ->check(CLI::Range(1, 1000));
-  app.add_option("--vote-epsilon", opt->labels.epsilon,
+  app.add_option("--vote-epsilon", opt->pipeline.labels.epsilon,
                  "vote: outside when more than this fraction of neighbours face the voxel")
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--alpha", opt->construct.subtree.alpha, "Weight of the fit term of Wu Eq. 4")
+  app.add_option("--alpha", opt->pipeline.construct.subtree.alpha, "Weight of the fit term of Wu Eq. 4")
       ->check(CLI::Range(0.0, 100.0));
-  app.add_option("--beta", opt->construct.unionChoice.beta, "Weight of the fit term of Wu Eq. 6")
+  app.add_option("--beta", opt->pipeline.construct.unionChoice.beta, "Weight of the fit term of Wu Eq. 6")
       ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--time-limit", opt->pipeline.timeLimit,
+                 "Seconds for the reconstruction (0: none). Detection past it fails; the "
+                 "optimisations past it keep the best tree found so far")
+      ->check(CLI::Range(0.0, 1e6));
   app.add_option("--mesh-res", opt->meshResolution, "Resolution of mesh.ply")
       ->check(CLI::Range(8, 2048));
   return [opt, &common]() -> int {
@@ -85,52 +82,25 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     timings["read"] = watch.seconds();
     console.info("read " + scanPath.string() + ": " + describeScan(scan));
 
-    watch = Stopwatch();
-    DetectOptions dopt;
-    dopt.seed = opt->seed;
-    DetectionResult det = detectSurfaces(scan.cloud, dopt);
-    if (det.status != DetectionResult::Status::Ok) {
-      throw ParseError(scanPath.string() + ": " + det.message);
+    ReconstructOptions ro2 = opt->pipeline;
+    ro2.seed = opt->seed;
+    ro2.resolution = opt->resolution;
+    ro2.labels.method = labelMethodFromName(opt->labelMethod);
+    const Reconstruction rec =
+        reconstruct(scan.cloud, ro2, [&](std::string_view stage, bool done,
+                                         const std::string& summary) {
+          if (done) console.info(std::string(stage) + ": " + summary);
+        });
+    for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
+    if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
+    if (rec.timeLimitHit) {
+      console.info("time limit reached: the optimisation kept its best solution so far");
     }
-    refineSurfaces(scan.cloud, det);
-    regularizeSurfaces(det);
-    timings["detect"] = watch.seconds();
-    console.info("surfaces: " + det.message);
-
-    watch = Stopwatch();
-    GridOptions go;
-    go.resolution = opt->resolution;
-    const VoxelGrid grid = VoxelGrid::around(minimalOrientedBox(scan.cloud.points), go);
-    HypothesisOptions ho;
-    ho.voxelSize = grid.voxelSize();
-    ho.seed = std::uint32_t(opt->seed);
-    const HypothesisSet hyp = generateHypotheses(scan.cloud, det.surfaces, ho);
-    timings["hypotheses"] = watch.seconds();
-    console.info("hypotheses: " + std::to_string(hyp.candidates.size()) + " candidates");
-
-    watch = Stopwatch();
-    opt->labels.method = labelMethodFromName(opt->labelMethod);
-    const VoxelLabels labels = labelVoxels(grid, scan.cloud, opt->labels);
-    timings["labels"] = watch.seconds();
+    const DetectionResult& det = rec.detection;
+    const HypothesisSet& hyp = rec.hypotheses;
+    const VoxelGrid& grid = rec.grid;
     const auto& dims = grid.dims();
-    console.info("voxels: " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
-                 std::to_string(dims[2]) + ", " + std::to_string(labels.inside.count()) +
-                 " inside (" + opt->labelMethod + ")");
-
-    watch = Stopwatch();
-    std::vector<CsgTree> candidates;
-    for (const Candidate& c : hyp.candidates) candidates.push_back(c.tree);
-    const std::vector<DescriptionSet> descriptions = describeAll(candidates, grid, labels);
-    timings["description_sets"] = watch.seconds();
-    watch = Stopwatch();
-    opt->construct.snapDistance = grid.voxelSize();
-    const Construction built = constructCsg(candidates, descriptions, labels.inside,
-                                            opt->construct);
-    timings["optimisation"] = watch.seconds();
-    if (built.tree.empty()) {
-      throw ParseError(scanPath.string() +
-                       ": no combination of the detected primitives explains the scan");
-    }
+    const Construction& built = rec.construction;
     const CsgTree& tree = built.tree;
     console.info("tree: " + std::to_string(tree.primitiveCount()) + " primitives, " +
                  std::to_string(tree.operationCount()) + " operations, depth " +
@@ -159,8 +129,6 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     fo.seed = opt->seed;
     const FitMetrics fit = evaluateFit(tree, scan.cloud, fo);
     timings["metrics"] = watch.seconds();
-    const std::size_t both = VoxelSet::countAnd(built.voxels, labels.inside);
-    const std::size_t either = VoxelSet::countOr(built.voxels, labels.inside);
 
     Report report;
     report.json["status"] = "ok";
@@ -168,8 +136,9 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     report.json["parameters"] = {{"res", opt->resolution},
                                  {"seed", opt->seed},
                                  {"label", opt->labelMethod},
-                                 {"alpha", opt->construct.subtree.alpha},
-                                 {"beta", opt->construct.unionChoice.beta}};
+                                 {"alpha", opt->pipeline.construct.subtree.alpha},
+                                 {"beta", opt->pipeline.construct.unionChoice.beta},
+                                 {"time_limit_s", opt->pipeline.timeLimit}};
     report.json["grid"] = {{"dims", {dims[0], dims[1], dims[2]}},
                            {"voxel_size", grid.voxelSize()}};
     const ConstructStats& st = built.stats;
@@ -180,11 +149,12 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                              {"subtrees", st.subtrees},
                              {"union_candidates", st.unionCandidates},
                              {"chosen", st.chosen},
-                             {"proved_optimal", st.provedOptimal}};
+                             {"proved_optimal", st.provedOptimal},
+                             {"time_limit_hit", rec.timeLimitHit}};
     report.json["tree"] = {{"primitives", tree.primitiveCount()},
                            {"operations", tree.operationCount()},
                            {"depth", tree.depth()}};
-    report.json["metrics"] = {{"voxel_iou", either ? double(both) / double(either) : 1.0},
+    report.json["metrics"] = {{"voxel_iou", rec.voxelIou()},
                               {"rmse", fit.rmse},
                               {"rmse_relative", fit.rmse / fit.diagonal},
                               {"chamfer", fit.chamfer},

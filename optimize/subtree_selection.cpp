@@ -35,7 +35,9 @@ struct LocalProblem {
 
 class BranchAndBound {
  public:
-  BranchAndBound(const LocalProblem& pb, std::uint64_t budget) : pb_(pb), budget_(budget) {
+  BranchAndBound(const LocalProblem& pb, std::uint64_t budget,
+                 std::chrono::steady_clock::time_point deadline)
+      : pb_(pb), budget_(budget), deadline_(deadline) {
     const std::size_t n = pb.removes.size();
     suffixOut_.assign(n + 1, VoxelSet(pb.universe));
     for (std::size_t t = n; t-- > 0;) suffixOut_[t] = suffixOut_[t + 1] | pb.removesOut[t];
@@ -57,6 +59,12 @@ class BranchAndBound {
   void search(std::size_t t, std::size_t chosen, const VoxelSet& removed,
               std::vector<std::uint8_t>& current) {
     if (++nodes_ > budget_) return;
+    // The clock is read every 1024 nodes; past the deadline the search ends
+    // as if the budget were spent.
+    if ((nodes_ & 1023) == 0 && std::chrono::steady_clock::now() > deadline_) {
+      budget_ = nodes_ - 1;
+      return;
+    }
     const double e = pb_.energy(chosen, removed);
     if (e < bestEnergy_ - 1e-12) {
       bestEnergy_ = e;
@@ -83,6 +91,7 @@ class BranchAndBound {
 
   const LocalProblem& pb_;
   std::uint64_t budget_;
+  std::chrono::steady_clock::time_point deadline_;
   std::uint64_t nodes_ = 0;
   std::vector<VoxelSet> suffixOut_;
   std::vector<std::uint8_t> best_;
@@ -241,7 +250,7 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
 
   std::vector<std::uint8_t> best;
   double bestEnergy = localSearch(sorted, best);
-  BranchAndBound bb(sorted, options.nodeBudget);
+  BranchAndBound bb(sorted, options.nodeBudget, options.deadline);
   result.provedOptimal = bb.run(best, bestEnergy);
   result.energy = bestEnergy;
   result.voxels = root;

@@ -6,6 +6,7 @@
 
 #include "voxel/voxel_set.h"
 
+#include <chrono>
 #include <cstdint>
 #include <vector>
 
@@ -26,6 +27,9 @@ struct SubtreeOptions {
   /// pays off when it corrects about this many voxels, whatever L is.
   double minFeatureVoxels = 8.0;
   std::uint64_t nodeBudget = 20'000;  ///< branch-and-bound nodes before falling back to local search
+  /// Wall clock at which branch and bound stops and keeps its best solution
+  /// so far (provedOptimal is then false). Default: never.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 
 /// Result of selectSubtree.

@@ -22,7 +22,9 @@ struct Problem {
 
 class BranchAndBound {
  public:
-  BranchAndBound(const Problem& pb, std::uint64_t budget) : pb_(pb), budget_(budget) {
+  BranchAndBound(const Problem& pb, std::uint64_t budget,
+                 std::chrono::steady_clock::time_point deadline)
+      : pb_(pb), budget_(budget), deadline_(deadline) {
     const std::size_t n = pb.covers.size();
     suffix_.assign(n + 1, VoxelSet(pb.inside->size()));
     for (std::size_t t = n; t-- > 0;) suffix_[t] = suffix_[t + 1] | pb.covers[t];
@@ -42,6 +44,12 @@ class BranchAndBound {
   void search(std::size_t t, std::size_t chosen, const VoxelSet& covered,
               std::vector<std::uint8_t>& current) {
     if (++nodes_ > budget_) return;
+    // The clock is read every 1024 nodes; past the deadline the search ends
+    // as if the budget were spent.
+    if ((nodes_ & 1023) == 0 && std::chrono::steady_clock::now() > deadline_) {
+      budget_ = nodes_ - 1;
+      return;
+    }
     const std::size_t have = covered.count();
     const double e = pb_.energy(chosen, have);
     if (e < bestEnergy_ - 1e-12) {
@@ -64,6 +72,7 @@ class BranchAndBound {
 
   const Problem& pb_;
   std::uint64_t budget_;
+  std::chrono::steady_clock::time_point deadline_;
   std::uint64_t nodes_ = 0;
   std::vector<VoxelSet> suffix_;
   std::vector<std::uint8_t> best_;
@@ -171,7 +180,7 @@ UnionResult selectUnion(const VoxelSet& inside, const std::vector<const VoxelSet
     const double e = descend(sorted, z);
     if (e < bestEnergy - 1e-12) bestEnergy = e, best = z;
   }
-  BranchAndBound bb(sorted, options.nodeBudget);
+  BranchAndBound bb(sorted, options.nodeBudget, options.deadline);
   result.provedOptimal = bb.run(best, bestEnergy);
   result.energy = bestEnergy;
   VoxelSet covered(local.size());

@@ -5,6 +5,7 @@
 
 #include "voxel/voxel_set.h"
 
+#include <chrono>
 #include <cstdint>
 #include <vector>
 
@@ -17,6 +18,9 @@ struct UnionOptions {
   /// |V+(P)|, so a candidate pays off when it adds about this many voxels.
   double minFeatureVoxels = 8.0;
   std::uint64_t nodeBudget = 50'000;  ///< branch-and-bound nodes before settling for local search
+  /// Wall clock at which branch and bound stops and keeps its best solution
+  /// so far (provedOptimal is then false). Default: never.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 
 /// Result of selectUnion.

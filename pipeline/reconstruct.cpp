@@ -1,0 +1,134 @@
+#include "pipeline/reconstruct.h"
+
+#include "primitives/regularization.h"
+#include "primitives/surface_refinement.h"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace csgvox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string dimsText(const VoxelGrid& grid) {
+  const auto& d = grid.dims();
+  return std::to_string(d[0]) + " x " + std::to_string(d[1]) + " x " + std::to_string(d[2]);
+}
+
+// Times one stage, reports its start and end, and records its duration.
+class StageClock {
+ public:
+  StageClock(Reconstruction& out, const StageCallback& onStage)
+      : out_(out), onStage_(onStage) {}
+  void start(std::string_view stage) {
+    stage_ = stage;
+    start_ = Clock::now();
+    if (onStage_) onStage_(stage_, false, {});
+  }
+  void finish(const std::string& summary) {
+    const double s = std::chrono::duration<double>(Clock::now() - start_).count();
+    out_.timings.push_back({std::string(stage_), s});
+    if (onStage_) onStage_(stage_, true, summary);
+  }
+
+ private:
+  Reconstruction& out_;
+  const StageCallback& onStage_;
+  std::string_view stage_;
+  Clock::time_point start_;
+};
+
+}  // namespace
+
+double Reconstruction::voxelIou() const {
+  const std::size_t either = VoxelSet::countOr(construction.voxels, labels.inside);
+  if (either == 0) return 1.0;
+  return double(VoxelSet::countAnd(construction.voxels, labels.inside)) / double(either);
+}
+
+Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options,
+                           const StageCallback& onStage) {
+  if (scan.empty()) throw std::invalid_argument("the scan has no points");
+  if (!scan.hasNormals()) throw std::invalid_argument("the scan has no normals");
+  Reconstruction out;
+  StageClock clock(out, onStage);
+  const bool limited = options.timeLimit > 0.0;
+  const Clock::time_point deadline =
+      limited ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                   std::chrono::duration<double>(options.timeLimit))
+              : Clock::time_point::max();
+  const auto pastDeadline = [&] { return limited && Clock::now() > deadline; };
+  const auto timedOut = [&](std::string_view stage) {
+    out.status = Reconstruction::Status::TimedOut;
+    out.message = "time limit reached during " + std::string(stage);
+    out.timeLimitHit = true;
+    return out;
+  };
+
+  clock.start("detect");
+  DetectOptions dopt = options.detect;
+  dopt.seed = options.seed;
+  out.detection = detectSurfaces(scan, dopt, [&](double, std::string_view) {
+    return !pastDeadline();
+  });
+  if (out.detection.status == DetectionResult::Status::Cancelled) return timedOut("detection");
+  if (!out.detection.ok()) {
+    out.status = Reconstruction::Status::NoSurfaces;
+    out.message = out.detection.message;
+    return out;
+  }
+  refineSurfaces(scan, out.detection);
+  regularizeSurfaces(out.detection);
+  clock.finish(out.detection.message);
+  if (pastDeadline()) return timedOut("detection");
+
+  clock.start("hypotheses");
+  GridOptions go;
+  go.resolution = options.resolution;
+  out.grid = VoxelGrid::around(minimalOrientedBox(scan.points), go);
+  HypothesisOptions ho;
+  ho.voxelSize = out.grid.voxelSize();
+  ho.seed = std::uint32_t(options.seed);
+  out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
+  clock.finish(std::to_string(out.hypotheses.candidates.size()) + " candidates");
+  if (pastDeadline()) return timedOut("hypotheses");
+
+  clock.start("labels");
+  out.labels = labelVoxels(out.grid, scan, options.labels);
+  clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
+               " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
+  if (pastDeadline()) return timedOut("labelling");
+
+  clock.start("description_sets");
+  std::vector<CsgTree> candidates;
+  candidates.reserve(out.hypotheses.candidates.size());
+  for (const Candidate& c : out.hypotheses.candidates) candidates.push_back(c.tree);
+  const std::vector<DescriptionSet> descriptions = describeAll(candidates, out.grid, out.labels);
+  clock.finish(std::to_string(descriptions.size()) + " sets");
+  if (pastDeadline()) return timedOut("description sets");
+
+  clock.start("optimisation");
+  ConstructOptions co = options.construct;
+  if (co.snapDistance == 0.0) co.snapDistance = out.grid.voxelSize();
+  co.subtree.deadline = std::min(co.subtree.deadline, deadline);
+  co.unionChoice.deadline = std::min(co.unionChoice.deadline, deadline);
+  out.construction = constructCsg(candidates, descriptions, out.labels.inside, co);
+  out.timeLimitHit = pastDeadline();
+  const ConstructStats& st = out.construction.stats;
+  clock.finish(std::to_string(st.chosen) + " of " + std::to_string(st.unionCandidates) +
+               " union candidates" + (st.provedOptimal ? ", proved optimal" : ""));
+  if (out.construction.tree.empty()) {
+    out.status = Reconstruction::Status::NoCombination;
+    out.message = "no combination of the detected primitives explains the scan";
+    return out;
+  }
+  out.tree = out.construction.tree;
+  out.status = Reconstruction::Status::Ok;
+  out.message = std::to_string(out.tree.primitiveCount()) + " primitives, " +
+                std::to_string(out.tree.operationCount()) + " operations, depth " +
+                std::to_string(out.tree.depth());
+  return out;
+}
+
+}  // namespace csgvox

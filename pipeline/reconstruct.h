@@ -1,0 +1,79 @@
+#pragma once
+/// The main job as one call: an oriented scan in, a CSG tree out, with
+/// every intermediate result and per-stage timings.
+///
+/// Stages: detect surfaces (RANSAC) → refine (Ceres) → regularise → voxel
+/// grid over the minimal oriented box → bounded hypotheses → voxel labels →
+/// description sets → Wu's two optimisations and the simplified tree.
+
+#include "optimize/csg_construction.h"
+#include "primitives/hypotheses.h"
+#include "primitives/point_cloud.h"
+#include "primitives/surface_detection.h"
+#include "voxel/description_sets.h"
+#include "voxel/labeling.h"
+#include "voxel/voxel_grid.h"
+
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace csgvox {
+
+/// Options of reconstruct().
+struct ReconstructOptions {
+  int resolution = 64;        ///< voxels along the longest side of the part's oriented box
+  std::uint64_t seed = 1;     ///< seeds detection and hypotheses; same seed, same tree
+  DetectOptions detect;       ///< surface detection (its seed is replaced by `seed`)
+  LabelOptions labels;        ///< voxel labelling
+  ConstructOptions construct; ///< the two optimisations (snapDistance 0: one voxel)
+  /// Wall-clock seconds for the whole call (0: none). Detection past the
+  /// limit fails; the optimisations past it stop searching and keep the best
+  /// solution their local search found, so the tree is still valid but may
+  /// not be the proved optimum (stats.provedOptimal is then false). A limit
+  /// that is hit makes the result depend on the machine's speed.
+  double timeLimit = 0.0;
+};
+
+/// Seconds spent in one stage.
+struct StageTime {
+  std::string stage;
+  double seconds = 0.0;
+};
+
+/// Everything reconstruct() produced.
+struct Reconstruction {
+  enum class Status {
+    Ok,             ///< `tree` holds the result
+    NoSurfaces,     ///< detection found nothing usable (see message)
+    NoCombination,  ///< no combination of the hypotheses explains the labelled voxels
+    TimedOut,       ///< the time limit ran out before a tree existed
+  };
+  Status status = Status::NoSurfaces;
+  std::string message;  ///< one line: what was built, or why nothing was
+  CsgTree tree;         ///< the result (empty unless Ok)
+  DetectionResult detection;
+  HypothesisSet hypotheses;
+  VoxelGrid grid;
+  VoxelLabels labels;
+  Construction construction;
+  std::vector<StageTime> timings;  ///< in pipeline order
+  bool timeLimitHit = false;       ///< the limit stopped a search early
+
+  bool ok() const { return status == Status::Ok; }
+  /// Voxel IoU of the tree's voxels against the inside labels.
+  double voxelIou() const;
+};
+
+/// Called when a stage starts and when it ends (`done`), with a one-line
+/// summary of what it produced at the end.
+using StageCallback = std::function<void(std::string_view stage, bool done,
+                                         const std::string& summary)>;
+
+/// Runs the whole reconstruction on an oriented scan.
+/// @throw std::invalid_argument when the scan has no normals or is empty.
+Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options = {},
+                           const StageCallback& onStage = {});
+
+}  // namespace csgvox
