@@ -105,6 +105,74 @@ CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates, double 
   return CsgTree::subtract(sub);
 }
 
+// Primitives a member puts in the tree.
+std::size_t memberPrimitives(const Member& m) { return 1 + m.actions.size(); }
+
+// Energy of a whole union for the final local search: `cost` voxels per
+// primitive plus every voxel where the union and the labels disagree. It is
+// Eq. 4 and Eq. 6 made global: an action or member pays for itself when it
+// corrects about `cost` voxels, the same rule as minFeatureVoxels.
+double unionEnergy(const std::vector<Member>& members, const VoxelSet& inside, double cost) {
+  VoxelSet u(inside.size());
+  std::size_t prims = 0;
+  for (const Member& m : members) {
+    u |= m.voxels;
+    prims += memberPrimitives(m);
+  }
+  const std::size_t disagree =
+      VoxelSet::countAndNot(u, inside) + VoxelSet::countAndNot(inside, u);
+  return cost * double(prims) + double(disagree);
+}
+
+// Removes members, one at a time, while that lowers the energy.
+double pruneMembers(std::vector<Member>& members, const VoxelSet& inside, double cost,
+                    double energy) {
+  for (bool improved = true; improved && members.size() > 1;) {
+    improved = false;
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      std::vector<Member> trial = members;
+      trial.erase(trial.begin() + long(i));
+      const double e = unionEnergy(trial, inside, cost);
+      if (e < energy - 1e-9) {
+        members = std::move(trial);
+        energy = e;
+        improved = true;
+        break;
+      }
+    }
+  }
+  return energy;
+}
+
+// Phase 1 builds each subtree for its own root and phase 2 then picks
+// members independently, so a root that cut too much gets its loss covered
+// by extra members. This local search over the whole union undoes such
+// pairs: it drops one action (or one member), then prunes the members that
+// no longer pay, and keeps the change when the global energy falls.
+void refineUnion(std::vector<Member>& members, std::span<const DescriptionSet> d,
+                 const VoxelSet& inside, double cost) {
+  double energy = unionEnergy(members, inside, cost);
+  energy = pruneMembers(members, inside, cost, energy);
+  for (bool improved = true; improved;) {
+    improved = false;
+    for (std::size_t i = 0; i < members.size() && !improved; ++i) {
+      for (std::size_t a = 0; a < members[i].actions.size() && !improved; ++a) {
+        std::vector<Member> trial = members;
+        Member& m = trial[i];
+        m.actions.erase(m.actions.begin() + long(a));
+        m.voxels = memberVoxels(m, d);
+        double e = unionEnergy(trial, inside, cost);
+        e = pruneMembers(trial, inside, cost, e);
+        if (e < energy - 1e-9) {
+          members = std::move(trial);
+          energy = e;
+          improved = true;
+        }
+      }
+    }
+  }
+}
+
 // Removes truncation actions and union members that change no voxel.
 void dropNoOps(std::vector<Member>& members, std::span<const DescriptionSet> d, std::size_t size) {
   for (Member& m : members) {
@@ -204,6 +272,9 @@ Construction constructCsg(std::span<const CsgTree> candidates,
   for (std::uint32_t i : u.chosen) members.push_back(pool[i]);
   if (progress) progress(0.95, "union");
 
+  if (options.refine && !members.empty()) {
+    refineUnion(members, d, inside, std::max(options.unionChoice.minFeatureVoxels, 1.0));
+  }
   if (options.simplify) dropNoOps(members, d, size);
   out.stats.chosen = members.size();
   out.voxels = unionVoxels(members, size);

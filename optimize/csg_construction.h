@@ -18,6 +18,11 @@ struct ConstructOptions {
   SubtreeOptions subtree;     ///< phase 1 (alpha, solver budget)
   UnionOptions unionChoice;   ///< phase 2 (beta, solver budget)
   bool simplify = true;       ///< drop no-op operations and lift shared subtractions
+  /// After phase 2, a local search over the whole union that drops actions
+  /// and members while (primitives × minFeatureVoxels + voxels disagreeing
+  /// with the labels) falls; undoes a root that cut too much and the members
+  /// chosen to cover its loss.
+  bool refine = true;
   /// A candidate counts as free of outside voxels (Wu: |V−| = 0) when at most
   /// this fraction of its voxels are labelled outside; absorbs labelling noise.
   double outsideTolerance = 0.02;

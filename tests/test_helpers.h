@@ -81,6 +81,21 @@ inline Vec3 randomPoint(Rng& rng, const Aabb& box) {
   return p;
 }
 
+/// Volumetric IoU of two solids given as point-membership tests, estimated
+/// on `samples` uniform random points of `box` (which must hold both).
+template <class InA, class InB>
+double sampledIou(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
+  Rng rng(seed);
+  std::size_t both = 0, either = 0;
+  for (int i = 0; i < samples; ++i) {
+    const Vec3 p = randomPoint(rng, box);
+    const bool a = inA(p), b = inB(p);
+    both += a && b;
+    either += a || b;
+  }
+  return either ? double(both) / double(either) : 1.0;
+}
+
 /// The box grown by `margin` on every side.
 inline Aabb grown(const Aabb& box, double margin) {
   Aabb b = box;

@@ -68,21 +68,6 @@ TEST(ScadExport, RejectsTreesWithoutExtent) {
 
 bool haveOpenScad() { return std::system("openscad --version > /dev/null 2>&1") == 0; }
 
-// Fraction of agreement measured as IoU on random points in `box`.
-template <class InA, class InB>
-double iou(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  int both = 0, either = 0;
-  for (int i = 0; i < samples; ++i) {
-    const Vec3 p = box.min + (box.max - box.min).cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
-    const bool a = inA(p), b = inB(p);
-    both += a && b;
-    either += a || b;
-  }
-  return either ? double(both) / either : 1.0;
-}
-
 class ScadRendersTheSameSolid : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ScadRendersTheSameSolid, AsTheTreeAndItsMesh) {
@@ -106,9 +91,9 @@ TEST_P(ScadRendersTheSameSolid, AsTheTreeAndItsMesh) {
   const MeshSolid renderSolid(meshTree(tree), voxel);
   const auto inScad = [&](const Vec3& p) { return scadSolid.contains(p); };
   const double vsTree =
-      iou(box, inScad, [&](const Vec3& p) { return tree.contains(p); }, 200000, 1);
+      test::sampledIou(box, inScad, [&](const Vec3& p) { return tree.contains(p); }, 200000, 1);
   const double vsRender =
-      iou(box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); }, 200000, 2);
+      test::sampledIou(box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); }, 200000, 2);
   EXPECT_GE(vsTree, 0.99) << part;
   EXPECT_GE(vsRender, 0.99) << part;
   RecordProperty("iou_vs_tree", std::to_string(vsTree));

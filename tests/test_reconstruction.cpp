@@ -1,0 +1,155 @@
+// The main job against ground truth: on every bundled part, clean and noisy,
+// the reconstructed tree must match the part's true tree in volume (IoU ≥
+// 0.95, by sampling both trees) with at most the true primitive count + 2.
+// Parts the voxel stage cannot reconstruct yet are named in kKnownGaps with
+// the reason; the test fails when one of them starts to pass, so the list
+// only shrinks.
+
+#include "io/scan_reader.h"
+#include "io/tree_json.h"
+#include "pipeline/reconstruct.h"
+#include "test_helpers.h"
+#include "part_list.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+namespace csgvox {
+namespace {
+
+struct KnownGap {
+  const char* part;
+  const char* scan;
+  const char* reason;
+};
+
+// Filled from measurement; every entry states why voxels alone fail there.
+constexpr KnownGap kKnownGaps[] = {
+    {"", "", ""},
+};
+
+const KnownGap* knownGap(const std::string& part, const std::string& scan) {
+  for (const KnownGap& g : kKnownGaps) {
+    if (part == g.part && scan == g.scan) return &g;
+  }
+  return nullptr;
+}
+
+struct Case {
+  std::string part;
+  std::string scan;
+};
+
+std::vector<Case> allCases() {
+  std::vector<Case> cases;
+  for (const std::string& p : test::partNames()) {
+    for (const char* s : {"scan.ply", "scan_noisy.ply"}) cases.push_back({p, s});
+  }
+  return cases;
+}
+
+/// Volumetric IoU of two bounded trees, on random points of their joint bounds.
+double treeIou(const CsgTree& a, const CsgTree& b) {
+  Aabb box = a.bounds();
+  const Aabb bb = b.bounds();
+  box.min = box.min.cwiseMin(bb.min);
+  box.max = box.max.cwiseMax(bb.max);
+  return test::sampledIou(
+      box, [&](const Vec3& p) { return a.contains(p); },
+      [&](const Vec3& p) { return b.contains(p); }, 400000, 7);
+}
+
+class ReconstructionVsTruth : public ::testing::TestWithParam<Case> {};
+
+TEST_P(ReconstructionVsTruth, VolumeAndPrimitiveCount) {
+  const Case& c = GetParam();
+  const CsgTree truth = readTreeJson(test::dataDir() / c.part / "tree.json");
+  const Scan scan = readScan(test::dataDir() / c.part / c.scan);
+  const Reconstruction rec = reconstruct(scan.cloud);
+  const std::size_t truePrims = truth.primitiveCount();
+  double iou = 0.0;
+  std::size_t prims = 0;
+  if (rec.ok()) {
+    iou = treeIou(rec.tree, truth);
+    prims = rec.tree.primitiveCount();
+  }
+  const bool passes = rec.ok() && iou >= 0.95 && prims <= truePrims + 2;
+  std::printf("%s/%s: %s, IoU %.4f, %zu primitives (truth %zu)\n", c.part.c_str(),
+              c.scan.c_str(), rec.ok() ? "ok" : rec.message.c_str(), iou, prims, truePrims);
+  RecordProperty("iou", std::to_string(iou));
+  RecordProperty("primitives", std::to_string(prims));
+  if (const KnownGap* g = knownGap(c.part, c.scan)) {
+    EXPECT_FALSE(passes) << c.part << "/" << c.scan
+                         << " reaches the bar now: remove it from kKnownGaps";
+    std::printf("known gap: %s\n", g->reason);
+    return;
+  }
+  ASSERT_TRUE(rec.ok()) << rec.message;
+  EXPECT_GE(iou, 0.95) << c.part << "/" << c.scan;
+  EXPECT_LE(prims, truePrims + 2) << c.part << "/" << c.scan;
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledParts, ReconstructionVsTruth, ::testing::ValuesIn(allCases()),
+                         [](const auto& info) {
+                           std::string name = info.param.part + "_" + info.param.scan;
+                           for (char& ch : name) {
+                             if (ch == '.') ch = '_';
+                           }
+                           return name;
+                         });
+
+TEST(Reconstruction, SameSeedSameTree) {
+  const Scan scan = readScan(test::dataDir() / "housing_complex" / "scan_noisy.ply");
+  ReconstructOptions o;
+  o.seed = 5;
+  const Reconstruction a = reconstruct(scan.cloud, o);
+  const Reconstruction b = reconstruct(scan.cloud, o);
+  ASSERT_EQ(a.ok(), b.ok());
+  if (a.ok()) {
+    EXPECT_EQ(treeNodeJson(a.tree), treeNodeJson(b.tree));
+  }
+}
+
+TEST(Reconstruction, ReportsEveryStageInOrder) {
+  const Scan scan = readScan(test::dataDir() / "plate_holes" / "scan.ply");
+  std::vector<std::string> started, finished;
+  const Reconstruction r =
+      reconstruct(scan.cloud, {}, [&](std::string_view stage, bool done, const std::string&) {
+        (done ? finished : started).emplace_back(stage);
+      });
+  ASSERT_TRUE(r.ok()) << r.message;
+  const std::vector<std::string> stages{"detect", "hypotheses", "labels", "description_sets",
+                                        "optimisation"};
+  EXPECT_EQ(started, stages);
+  EXPECT_EQ(finished, stages);
+  ASSERT_EQ(r.timings.size(), stages.size());
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    EXPECT_EQ(r.timings[i].stage, stages[i]);
+    EXPECT_GE(r.timings[i].seconds, 0.0);
+  }
+  EXPECT_GT(r.voxelIou(), 0.9);
+}
+
+TEST(Reconstruction, TinyTimeLimitStopsCleanly) {
+  const Scan scan = readScan(test::dataDir() / "housing_complex" / "scan.ply");
+  ReconstructOptions o;
+  o.timeLimit = 1e-6;
+  const Reconstruction r = reconstruct(scan.cloud, o);
+  // The limit is spent before detection ends: no tree, and the reason.
+  EXPECT_EQ(r.status, Reconstruction::Status::TimedOut);
+  EXPECT_TRUE(r.tree.empty());
+  EXPECT_TRUE(r.timeLimitHit);
+  EXPECT_NE(r.message.find("time limit"), std::string::npos) << r.message;
+}
+
+TEST(Reconstruction, RejectsScansWithoutNormals) {
+  PointCloud cloud;
+  EXPECT_THROW(reconstruct(cloud), std::invalid_argument);
+  cloud.points.assign(200, Vec3::Zero());
+  EXPECT_THROW(reconstruct(cloud), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace csgvox
