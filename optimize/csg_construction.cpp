@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 
 namespace csgvox {
@@ -145,14 +147,27 @@ double pruneMembers(std::vector<Member>& members, const VoxelSet& inside, double
 }
 
 // Phase 1 builds each subtree for its own root and phase 2 then picks
-// members independently, so a root that cut too much gets its loss covered
-// by extra members. This local search over the whole union undoes such
-// pairs: it drops one action (or one member), then prunes the members that
-// no longer pay, and keeps the change when the global energy falls.
-void refineUnion(std::vector<Member>& members, std::span<const DescriptionSet> d,
-                 const VoxelSet& inside, double cost) {
+// members independently among the subtrees free of outside voxels, so a
+// root that cut too much gets its loss covered by extra members, and a
+// subtree a few mislabelled voxels short of clean is never offered. This
+// local search over the whole union repairs both with three moves, each
+// followed by pruning the members that no longer pay: drop one action of a
+// member, or add one subtree from `extra` (every subtree phase 1 built,
+// clean or not). A move is kept when the global energy falls.
+void refineUnion(std::vector<Member>& members, const std::vector<Member>& extra,
+                 std::span<const DescriptionSet> d, const VoxelSet& inside, double cost) {
   double energy = unionEnergy(members, inside, cost);
   energy = pruneMembers(members, inside, cost, energy);
+  const auto tryMove = [&](std::vector<Member>& trial) {
+    double e = unionEnergy(trial, inside, cost);
+    e = pruneMembers(trial, inside, cost, e);
+    if (e < energy - 1e-9) {
+      members = std::move(trial);
+      energy = e;
+      return true;
+    }
+    return false;
+  };
   for (bool improved = true; improved;) {
     improved = false;
     for (std::size_t i = 0; i < members.size() && !improved; ++i) {
@@ -161,14 +176,17 @@ void refineUnion(std::vector<Member>& members, std::span<const DescriptionSet> d
         Member& m = trial[i];
         m.actions.erase(m.actions.begin() + long(a));
         m.voxels = memberVoxels(m, d);
-        double e = unionEnergy(trial, inside, cost);
-        e = pruneMembers(trial, inside, cost, e);
-        if (e < energy - 1e-9) {
-          members = std::move(trial);
-          energy = e;
-          improved = true;
-        }
+        improved = tryMove(trial);
       }
+    }
+    for (std::size_t k = 0; k < extra.size() && !improved; ++k) {
+      const bool present = std::any_of(members.begin(), members.end(), [&](const Member& m) {
+        return m.root == extra[k].root && m.actions == extra[k].actions;
+      });
+      if (present || VoxelSet::countAnd(extra[k].voxels, inside) == 0) continue;
+      std::vector<Member> trial = members;
+      trial.push_back(extra[k]);
+      improved = tryMove(trial);
     }
   }
 }
@@ -264,6 +282,14 @@ Construction constructCsg(std::span<const CsgTree> candidates,
     ++out.stats.subtrees;
   }
   out.stats.unionCandidates = pool.size();
+  if (std::getenv("CSGVOX_DEBUG")) {
+    for (std::size_t r = 0; r < truncate.size(); ++r) {
+      const VoxelSet& v = subtrees[r].voxels;
+      std::fprintf(stderr, "trunc root %u: |V|=%zu out=%zu actions=%zu\n", truncate[r], v.count(),
+                   VoxelSet::countAndNot(v, inside), subtrees[r].actions.size());
+    }
+    for (std::uint32_t i : usable) std::fprintf(stderr, "usable %u |V|=%zu\n", i, d[i].voxels.count());
+  }
   std::vector<const VoxelSet*> sets;
   for (const Member& m : pool) sets.push_back(&m.voxels);
   const UnionResult u = selectUnion(inside, sets, options.unionChoice);
@@ -272,8 +298,15 @@ Construction constructCsg(std::span<const CsgTree> candidates,
   for (std::uint32_t i : u.chosen) members.push_back(pool[i]);
   if (progress) progress(0.95, "union");
 
-  if (options.refine && !members.empty()) {
-    refineUnion(members, d, inside, std::max(options.unionChoice.minFeatureVoxels, 1.0));
+  if (options.refine) {
+    std::vector<Member> extra;
+    for (std::uint32_t i : usable) extra.push_back(Member{i, {}, d[i].voxels});
+    for (std::size_t r = 0; r < truncate.size(); ++r) {
+      if (!subtrees[r].voxels.none()) {
+        extra.push_back(Member{truncate[r], subtrees[r].actions, subtrees[r].voxels});
+      }
+    }
+    refineUnion(members, extra, d, inside, std::max(options.unionChoice.minFeatureVoxels, 1.0));
   }
   if (options.simplify) dropNoOps(members, d, size);
   out.stats.chosen = members.size();

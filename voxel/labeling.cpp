@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <stdexcept>
@@ -15,39 +16,38 @@
 namespace csgvox {
 namespace {
 
-VoxelSet occupiedVoxels(const VoxelGrid& grid, const PointCloud& scan) {
-  VoxelSet occ(grid.voxelCount());
+constexpr std::size_t kNoVoxel = std::numeric_limits<std::size_t>::max();
+
+// Index of the voxel holding p, or kNoVoxel outside the grid.
+std::size_t voxelOf(const VoxelGrid& grid, const Vec3& p) {
+  const Vec3 g = grid.toGrid(p);
   const auto& d = grid.dims();
-  for (const Vec3& p : scan.points) {
-    const Vec3 g = grid.toGrid(p);
-    const int i = int(std::floor(g.x())), j = int(std::floor(g.y())), k = int(std::floor(g.z()));
-    if (i >= 0 && j >= 0 && k >= 0 && i < d[0] && j < d[1] && k < d[2]) occ.set(grid.index(i, j, k));
-  }
-  return occ;
+  const int i = int(std::floor(g.x())), j = int(std::floor(g.y())), k = int(std::floor(g.z()));
+  if (i < 0 || j < 0 || k < 0 || i >= d[0] || j >= d[1] || k >= d[2]) return kNoVoxel;
+  return grid.index(i, j, k);
 }
 
 // Wu et al. §4.1: outside when more than epsilon of the K nearest points
-// have normals pointing towards the voxel centre.
-std::vector<char> normalVote(const VoxelGrid& grid, const PointCloud& scan,
-                             const LabelOptions& o) {
-  const NearestNeighbors index(scan.points);
-  std::vector<char> inside(grid.voxelCount(), 0);
-  const std::size_t k = std::size_t(std::max(1, o.neighbors));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 1024),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      std::vector<std::uint32_t> near;
-                      for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                        const Vec3 c = grid.center(v);
-                        index.kNearest(c, k, near);
-                        std::size_t facing = 0;
-                        for (std::uint32_t i : near) {
-                          facing += scan.normals[i].dot(c - scan.points[i]) > 0.0;
-                        }
-                        inside[v] = !(double(facing) > o.epsilon * double(near.size()));
-                      }
-                    });
-  return inside;
-}
+// have normals pointing towards the point.
+class NormalVote {
+ public:
+  NormalVote(const PointCloud& scan, const LabelOptions& o)
+      : scan_(scan), index_(scan.points), k_(std::size_t(std::max(1, o.neighbors))),
+        epsilon_(o.epsilon) {}
+
+  bool inside(const Vec3& c, std::vector<std::uint32_t>& near) const {
+    index_.kNearest(c, k_, near);
+    std::size_t facing = 0;
+    for (std::uint32_t i : near) facing += scan_.normals[i].dot(c - scan_.points[i]) > 0.0;
+    return !(double(facing) > epsilon_ * double(near.size()));
+  }
+
+ private:
+  const PointCloud& scan_;
+  NearestNeighbors index_;
+  std::size_t k_;
+  double epsilon_;
+};
 
 // Octree of oriented, area-weighted points for the Barnes-Hut winding number.
 class DipoleTree {
@@ -165,18 +165,122 @@ std::vector<double> pointAreas(const PointCloud& scan, int k) {
   return areas;
 }
 
-std::vector<char> windingNumber(const VoxelGrid& grid, const PointCloud& scan,
-                                const LabelOptions& o) {
-  const DipoleTree tree(scan, pointAreas(scan, o.areaNeighbors));
-  std::vector<char> inside(grid.voxelCount(), 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 1024),
+// Inside when the winding number exceeds the threshold.
+class WindingNumber {
+ public:
+  WindingNumber(const PointCloud& scan, const LabelOptions& o)
+      : tree_(scan, pointAreas(scan, o.areaNeighbors)), ratio_(o.farFieldRatio),
+        threshold_(o.windingThreshold) {}
+
+  bool inside(const Vec3& q, std::vector<std::uint32_t>& /*scratch*/) const {
+    return tree_.winding(q, ratio_) > threshold_;
+  }
+
+ private:
+  DipoleTree tree_;
+  double ratio_;
+  double threshold_;
+};
+
+// Occupied voxels whose centre is outside but whose points bound material
+// that no voxel centre falls in: a wall thinner than a voxel, lying between
+// two layers of centres. The points of such a voxel are grouped by normal
+// (one group per side of a wall). A group's material is caught when a voxel
+// up to 2.5 voxels behind its mean point (against its mean normal) has its
+// centre inside: a thick solid, or a wall seen by the next layer of centres.
+// Otherwise the voxel stays inside when the rule finds material a quarter or
+// half a voxel behind the surface.
+template <class Rule>
+std::vector<std::size_t> thinWallVoxels(const VoxelGrid& grid, const PointCloud& scan,
+                                        const std::vector<char>& in, const Rule& rule) {
+  std::vector<std::pair<std::size_t, std::uint32_t>> byVoxel;  // (voxel, point)
+  byVoxel.reserve(scan.size());
+  for (std::uint32_t i = 0; i < scan.size(); ++i) {
+    const std::size_t v = voxelOf(grid, scan.points[i]);
+    if (v != kNoVoxel && !in[v]) byVoxel.emplace_back(v, i);
+  }
+  std::sort(byVoxel.begin(), byVoxel.end());
+  std::vector<std::size_t> starts;
+  for (std::size_t a = 0; a < byVoxel.size(); ++a) {
+    if (a == 0 || byVoxel[a].first != byVoxel[a - 1].first) starts.push_back(a);
+  }
+  starts.push_back(byVoxel.size());
+  const double h = grid.voxelSize();
+  std::vector<char> keep(starts.size() - 1, 0);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, keep.size(), 64),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> scratch;
+        std::vector<char> done;
+        for (std::size_t g = r.begin(); g != r.end(); ++g) {
+          const std::size_t b = starts[g], e = starts[g + 1], v = byVoxel[b].first;
+          done.assign(e - b, 0);
+          for (std::size_t a = b; a < e && !keep[g]; ++a) {
+            if (done[a - b]) continue;
+            // The points facing like point a: one side of a wall.
+            const Vec3& n0 = scan.normals[byVoxel[a].second];
+            Vec3 p = Vec3::Zero(), n = Vec3::Zero();
+            int count = 0;
+            for (std::size_t c = a; c < e; ++c) {
+              const std::uint32_t i = byVoxel[c].second;
+              if (done[c - b] || scan.normals[i].dot(n0) < 0.5) continue;
+              done[c - b] = 1;
+              p += scan.points[i];
+              n += scan.normals[i];
+              ++count;
+            }
+            p /= double(count);
+            if (n.norm() == 0.0) continue;
+            n.normalize();
+            bool caught = false;
+            for (double s : {0.5, 1.0, 1.5, 2.0, 2.5}) {
+              const std::size_t w = voxelOf(grid, p - s * h * n);
+              caught = caught || (w != kNoVoxel && w != v && in[w]);
+            }
+            if (caught) continue;
+            for (double s : {0.25, 0.5}) {
+              if (rule.inside(p - s * h * n, scratch)) {
+                keep[g] = 1;
+                break;
+              }
+            }
+          }
+        }
+      });
+  std::vector<std::size_t> kept;
+  for (std::size_t g = 0; g < keep.size(); ++g) {
+    if (keep[g]) kept.push_back(byVoxel[starts[g]].first);
+  }
+  return kept;
+}
+
+template <class Rule>
+VoxelLabels label(const VoxelGrid& grid, const PointCloud& scan, const LabelOptions& o) {
+  const Rule rule(scan, o);
+  std::vector<char> in(grid.voxelCount(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<std::uint32_t> scratch;
                       for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                        inside[v] = tree.winding(grid.center(v), o.farFieldRatio) >
-                                    o.windingThreshold;
+                        in[v] = rule.inside(grid.center(v), scratch);
                       }
                     });
-  return inside;
+  VoxelLabels labels;
+  labels.occupied = VoxelSet(grid.voxelCount());
+  for (const Vec3& p : scan.points) {
+    const std::size_t v = voxelOf(grid, p);
+    if (v != kNoVoxel) labels.occupied.set(v);
+  }
+  labels.inside = VoxelSet(grid.voxelCount());
+  for (std::size_t v = 0; v < in.size(); ++v) {
+    if (in[v]) labels.inside.set(v);
+  }
+  if (o.boundary == BoundaryRule::Inside) {
+    labels.inside |= labels.occupied;
+  } else if (o.keepThinWalls) {
+    for (std::size_t v : thinWallVoxels(grid, scan, in, rule)) labels.inside.set(v);
+  }
+  return labels;
 }
 
 }  // namespace
@@ -184,15 +288,8 @@ std::vector<char> windingNumber(const VoxelGrid& grid, const PointCloud& scan,
 VoxelLabels labelVoxels(const VoxelGrid& grid, const PointCloud& scan, const LabelOptions& o) {
   if (scan.empty()) throw std::invalid_argument("cannot label voxels from an empty scan");
   if (!scan.hasNormals()) throw std::invalid_argument("labelling voxels needs scan normals");
-  const std::vector<char> in = o.method == LabelMethod::NormalVote ? normalVote(grid, scan, o)
-                                                                    : windingNumber(grid, scan, o);
-  VoxelLabels labels;
-  labels.occupied = occupiedVoxels(grid, scan);
-  labels.inside = labels.occupied;
-  for (std::size_t v = 0; v < in.size(); ++v) {
-    if (in[v]) labels.inside.set(v);
-  }
-  return labels;
+  return o.method == LabelMethod::NormalVote ? label<NormalVote>(grid, scan, o)
+                                             : label<WindingNumber>(grid, scan, o);
 }
 
 std::string_view labelMethodName(LabelMethod method) {
