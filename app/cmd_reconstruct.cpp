@@ -30,6 +30,7 @@ struct CommandOptions {
   int resolution = 64;
   std::uint64_t seed = 1;
   std::string labelMethod = "winding";
+  std::string boundary = "centre";
   ReconstructOptions pipeline;
   int meshResolution = 160;
 };
@@ -56,6 +57,10 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                  "Voxel labelling: winding (generalised winding number) or vote (Wu's K-nearest "
                  "normal vote)")
       ->check(CLI::IsMember({"winding", "vote"}));
+  app.add_option("--label-boundary", opt->boundary,
+                 "Voxels holding scan points: centre (labelled at their centre like every other "
+                 "voxel; default) or inside (always inside, Wu's rule)")
+      ->check(CLI::IsMember({"centre", "inside"}));
   app.add_option("-K,--neighbors", opt->pipeline.labels.neighbors, "vote: nearest points per voxel")
       ->check(CLI::Range(1, 1000));
   app.add_option("--vote-epsilon", opt->pipeline.labels.epsilon,
@@ -86,6 +91,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     ro2.seed = opt->seed;
     ro2.resolution = opt->resolution;
     ro2.labels.method = labelMethodFromName(opt->labelMethod);
+    ro2.labels.boundary = opt->boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
     const Reconstruction rec =
         reconstruct(scan.cloud, ro2, [&](std::string_view stage, bool done,
                                          const std::string& summary) {
@@ -136,6 +142,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     report.json["parameters"] = {{"res", opt->resolution},
                                  {"seed", opt->seed},
                                  {"label", opt->labelMethod},
+                                 {"label_boundary", opt->boundary},
                                  {"alpha", opt->pipeline.construct.subtree.alpha},
                                  {"beta", opt->pipeline.construct.unionChoice.beta},
                                  {"time_limit_s", opt->pipeline.timeLimit}};

@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstdio>
-#include <cstdlib>
 #include <map>
 
 namespace csgvox {
@@ -282,14 +280,6 @@ Construction constructCsg(std::span<const CsgTree> candidates,
     ++out.stats.subtrees;
   }
   out.stats.unionCandidates = pool.size();
-  if (std::getenv("CSGVOX_DEBUG")) {
-    for (std::size_t r = 0; r < truncate.size(); ++r) {
-      const VoxelSet& v = subtrees[r].voxels;
-      std::fprintf(stderr, "trunc root %u: |V|=%zu out=%zu actions=%zu\n", truncate[r], v.count(),
-                   VoxelSet::countAndNot(v, inside), subtrees[r].actions.size());
-    }
-    for (std::uint32_t i : usable) std::fprintf(stderr, "usable %u |V|=%zu\n", i, d[i].voxels.count());
-  }
   std::vector<const VoxelSet*> sets;
   for (const Member& m : pool) sets.push_back(&m.voxels);
   const UnionResult u = selectUnion(inside, sets, options.unionChoice);
