@@ -3,7 +3,10 @@
 #include "primitives/regularization.h"
 #include "primitives/surface_refinement.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace csgvox {
@@ -93,6 +96,25 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
   clock.finish(std::to_string(out.hypotheses.candidates.size()) + " candidates");
   if (pastDeadline()) return timedOut("hypotheses");
+  if (options.memoryLimit > 0) {
+    const double perVoxel = 3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
+    const double need = perVoxel * double(out.grid.voxelCount());
+    if (need > double(options.memoryLimit)) {
+      // Voxel count grows with the cube of the resolution.
+      const double fit = double(options.resolution) *
+                         std::cbrt(double(options.memoryLimit) / need);
+      out.status = Reconstruction::Status::TooLarge;
+      char buf[256];
+      std::snprintf(buf, sizeof(buf),
+                    "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
+                    "than the %.1f GiB allowed; use a resolution of at most %d",
+                    options.resolution, need / double(1u << 30),
+                    out.hypotheses.candidates.size(), out.grid.voxelCount(),
+                    double(options.memoryLimit) / double(1u << 30), int(fit));
+      out.message = buf;
+      return out;
+    }
+  }
 
   clock.start("labels");
   out.labels = labelVoxels(out.grid, scan, options.labels);

@@ -34,6 +34,11 @@ struct ReconstructOptions {
   /// not be the proved optimum (stats.provedOptimal is then false). A limit
   /// that is hit makes the result depend on the machine's speed.
   double timeLimit = 0.0;
+  /// Bytes the voxel stage may use (0: no limit). The description sets take
+  /// about candidates × voxels / 8 bytes and the optimisation up to twice
+  /// that again; a resolution that would need more fails before labelling
+  /// with a message naming the largest resolution that fits.
+  std::size_t memoryLimit = std::size_t(4) << 30;
 };
 
 /// Seconds spent in one stage.
@@ -49,6 +54,7 @@ struct Reconstruction {
     NoSurfaces,     ///< detection found nothing usable (see message)
     NoCombination,  ///< no combination of the hypotheses explains the labelled voxels
     TimedOut,       ///< the time limit ran out before a tree existed
+    TooLarge,       ///< the voxel stage would need more than memoryLimit
   };
   Status status = Status::NoSurfaces;
   std::string message;  ///< one line: what was built, or why nothing was

@@ -306,6 +306,12 @@ class Regularizer {
   // Clusters one scalar parameter of the surfaces selected by `get` (nullptr
   // to skip a surface) and sets each cluster to its weighted mean.
   void equalize(const std::function<double*(Surface&)>& get, double tolerance) {
+    equalize(get, [tolerance](const Surface&, const Surface&) { return tolerance; });
+  }
+
+  // As above with a tolerance per pair of surfaces.
+  void equalize(const std::function<double*(Surface&)>& get,
+                const std::function<double(const Surface&, const Surface&)>& tolerance) {
     std::vector<std::size_t> ids;
     std::vector<double> weights;
     for (std::size_t s = 0; s < r_.surfaces.size(); ++s) {
@@ -316,7 +322,8 @@ class Regularizer {
     }
     const auto value = [&](std::size_t k) { return *get(r_.surfaces[ids[k]]); };
     const auto clusters = clusterByWeight(weights, [&](std::size_t a, std::size_t b) {
-      return std::abs(value(a) - value(b)) <= tolerance;
+      return std::abs(value(a) - value(b)) <=
+             tolerance(r_.surfaces[ids[a]], r_.surfaces[ids[b]]);
     });
     for (const auto& members : clusters) {
       if (members.size() < 2) continue;
@@ -336,23 +343,39 @@ class Regularizer {
     }
   }
 
+  // Two fitted radii are the same design value when they differ by less
+  // than their estimation error allows: the inlier band (epsilon) is far
+  // wider than that and would merge a 5.5 hole with a 7.5 bore on a noisy
+  // scan. A radius fitted to n points with noise sigma has a standard error
+  // of about sigma / sqrt(n), doubled for partial arcs; radii within three
+  // such errors (at least 0.1 % of D, at most the epsilon rule) are equal.
+  double radiusTolerance(const Surface& a, const Surface& b) const {
+    const auto se2 = [&](const Surface& s) {
+      const double sigma = std::max(r_.noise, s.rms);
+      return 4.0 * sigma * sigma / weightOf(s);
+    };
+    const double floor = 1e-3 * r_.diagonal;
+    return std::min(radiusTol_, std::max(floor, 3.0 * std::sqrt(se2(a) + se2(b))));
+  }
+
   void snapEqualRadii() {
+    const auto tol = [this](const Surface& a, const Surface& b) { return radiusTolerance(a, b); };
     equalize([](Surface& s) -> double* {
       auto* c = std::get_if<CylinderSurface>(&s.shape);
       return c ? &c->radius : nullptr;
-    }, radiusTol_);
+    }, tol);
     equalize([](Surface& s) -> double* {
       auto* c = std::get_if<SphereSurface>(&s.shape);
       return c ? &c->radius : nullptr;
-    }, radiusTol_);
+    }, tol);
     equalize([](Surface& s) -> double* {
       auto* t = std::get_if<TorusSurface>(&s.shape);
       return t ? &t->majorRadius : nullptr;
-    }, radiusTol_);
+    }, tol);
     equalize([](Surface& s) -> double* {
       auto* t = std::get_if<TorusSurface>(&s.shape);
       return t ? &t->minorRadius : nullptr;
-    }, radiusTol_);
+    }, tol);
     equalize([](Surface& s) -> double* {
       auto* c = std::get_if<ConeSurface>(&s.shape);
       return c ? &c->halfAngle : nullptr;

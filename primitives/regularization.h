@@ -17,7 +17,7 @@ struct RegularizeOptions {
   double angleTolerance = 3.0 * std::numbers::pi / 180.0;  ///< directions this close to parallel or orthogonal are snapped, radians
   double offsetTolerance = 1.0;  ///< parallel planes whose offsets differ by at most this merge, in units of the detection epsilon
   double axisTolerance = 1.0;    ///< parallel axes whose lines are at most this far apart become one, in units of the detection epsilon
-  double radiusTolerance = 1.0;  ///< radii that differ by at most this become equal, in units of the detection epsilon
+  double radiusTolerance = 1.0;  ///< upper bound on the radius difference made equal, in units of the detection epsilon (the bound used is three standard errors of the two fits, at least 0.1 % of D)
   bool orthogonal = true;        ///< snap near-orthogonal directions (planes, axes) to exactly orthogonal
   bool mergeCoplanar = true;     ///< merge coplanar planes of the same orientation into one surface
   bool coaxial = true;           ///< snap nearly coaxial cylinders, cones and tori (and sphere centres) to one axis

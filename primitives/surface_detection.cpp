@@ -655,6 +655,10 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     result.status = Status::Ok;
     RefineOptions settle;
     settle.maxFitPoints = 3000;
+    // Points a surface's band reaches away from its patch stay with it until
+    // the final refinement: the later passes search the unassigned points
+    // for new surfaces, and stray noise is no help there.
+    settle.connectedPatches = false;
     refineSurfaces(cloud, result, settle);
     found = std::move(result.surfaces);
     result.surfaces.clear();

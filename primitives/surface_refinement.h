@@ -21,6 +21,7 @@ struct RefineOptions {
   int maxIterations = 50;         ///< Levenberg-Marquardt iterations per fit (count)
   std::size_t maxFitPoints = 5000;  ///< larger inlier sets are fitted on an even subset of this many points (count)
   bool reassign = true;           ///< re-assign points to the nearest compatible surface, then re-fit
+  bool connectedPatches = true;   ///< the re-assignment keeps a surface's points only on its connected patches (see reassignPoints)
   bool removeRedundant = true;    ///< drop surfaces whose points other surfaces explain as well
   double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least this share of its inliers (fraction)
 };
@@ -94,11 +95,17 @@ Vec3 surfaceNormal(const Surface& surface, const Vec3& p);
 /// Assigns every point to the surface it fits best (smallest scaled squared
 /// distance plus PointFit::normal2) among those it lies on (pointOnSurface
 /// with fitScales(result), result.epsilon and result.normalThreshold), or to
-/// none;
-/// updates inliers, assignment, centroids and rms, and drops surfaces left
-/// with fewer than `minPoints` inliers (their points go to the next best
-/// surface). Surfaces keep their order.
-void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_t minPoints);
+/// none. With `connectedPatches`, as in detection, a surface's points must
+/// form connected patches (cells of side result.clusterEpsilon that touch):
+/// when a surface has a patch of at least `minPoints` points, its points in
+/// smaller patches (noise of other surfaces reaching into its band away from
+/// it) go to the best other surface whose patch they touch, or to none.
+/// Updates inliers,
+/// assignment, centroids and rms, and drops surfaces left with fewer than
+/// `minPoints` inliers (their points go to the next best surface). Surfaces
+/// keep their order.
+void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_t minPoints,
+                    bool connectedPatches = true);
 
 /// Refines every surface of `result` on its inliers (fitSurface with
 /// fitScales), removes redundant surfaces (those whose points other surfaces

@@ -29,14 +29,9 @@ struct KnownMiss {
   const char* leaf;
   const char* reason;
 };
-constexpr KnownMiss kKnownMisses[] = {
-    {"housing_complex", "scan_noisy.ply", "mount_hole_2",
-     "noisy inliers end the bounded hole short of its counterbore: worst visible sample 1.61 "
-     "from the candidate, tolerance 1.49 (1 % of D)"},
-    {"stepped_shaft", "scan_noisy.ply", "main",
-     "the main body's cylinder stops at the noisy shoulder: worst visible sample 3.96, "
-     "tolerance 1.34"},
-};
+// Empty: every observable primitive of every bundled scan has a candidate.
+// A regression that cannot be fixed at once is listed here with its numbers.
+const std::vector<KnownMiss> kKnownMisses = {};
 
 const KnownMiss* knownMiss(const std::string& part, const std::string& scan,
                            const std::string& leaf) {
@@ -50,6 +45,8 @@ struct PipelineCase {
   std::string part;
   std::string scan;  // file name in data/<part>/
 };
+
+void PrintTo(const PipelineCase& c, std::ostream* os) { *os << c.part << "/" << c.scan; }
 
 class DetectionPipeline : public ::testing::TestWithParam<PipelineCase> {};
 

@@ -42,6 +42,8 @@ struct Case {
   std::string scan;
 };
 
+void PrintTo(const Case& c, std::ostream* os) { *os << c.part << "/" << c.scan; }
+
 std::vector<Case> allCases() {
   std::vector<Case> cases;
   for (const std::string& p : test::partNames()) {
