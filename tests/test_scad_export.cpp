@@ -7,6 +7,7 @@
 #include "io/tree_json.h"
 #include "io/triangle_mesh.h"
 #include "part_list.h"
+#include "test_helpers.h"
 
 #include <gtest/gtest.h>
 
@@ -93,7 +94,8 @@ TEST_P(ScadRendersTheSameSolid, AsTheTreeAndItsMesh) {
   const double vsTree =
       test::sampledIou(box, inScad, [&](const Vec3& p) { return tree.contains(p); }, 200000, 1);
   const double vsRender =
-      test::sampledIou(box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); }, 200000, 2);
+      test::sampledIou(box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); },
+                       200000, 2);
   EXPECT_GE(vsTree, 0.99) << part;
   EXPECT_GE(vsRender, 0.99) << part;
   RecordProperty("iou_vs_tree", std::to_string(vsTree));
