@@ -688,6 +688,9 @@ TEST(Regularization, MergesCoplanarPlanesAndSnapsAxesAndRadii) {
   r.surfaces.push_back(cylinderSurface(axisPoint + 0.3 * f.col(1), tilt(n, 1.0, rng), 2.0, 400));
   r.surfaces.push_back(cylinderSurface(axisPoint + 20.0 * f.col(1), n, 4.2, 300));  // not coaxial
   finish(r);
+  // Noisy fits: the radii 4.0 and 4.2 are within three standard errors
+  // (sigma 0.5: 3 * sqrt(4 * 0.25 * (1/500 + 1/300)) = 0.22).
+  r.noise = 0.5;
   const RegularizationReport report = regularizeSurfaces(r);
   EXPECT_EQ(report.coplanarMerged, 1);
   ASSERT_EQ(r.surfaces.size(), 6u);
@@ -706,6 +709,25 @@ TEST(Regularization, MergesCoplanarPlanesAndSnapsAxesAndRadii) {
   EXPECT_EQ(cyl[0]->radius, cyl[2]->radius);
   EXPECT_NEAR(cyl[0]->radius, (4.0 * 500 + 4.2 * 300) / 800.0, 1e-12);
   EXPECT_EQ(report.coaxial, 2);
+  EXPECT_EQ(report.equalRadii, 2);
+}
+
+TEST(Regularization, KeepsRadiiApartWhenTheFitsTellThemApart) {
+  // Both radii lie within one epsilon (0.5), but fits of 400 points with
+  // noise 0.05 know each radius to about 0.005: 4.0 and 4.2 are different
+  // design values (a 5.5 hole beside a 7.5 bore on a noisy scan is the same
+  // case at a larger scale).
+  DetectionResult r;
+  r.surfaces.push_back(cylinderSurface(Vec3::Zero(), Vec3::UnitZ(), 4.0, 400));
+  r.surfaces.push_back(cylinderSurface(Vec3(20, 0, 0), Vec3::UnitZ(), 4.2, 400));
+  r.surfaces.push_back(cylinderSurface(Vec3(40, 0, 0), Vec3::UnitZ(), 4.004, 400));
+  finish(r);
+  r.noise = 0.05;
+  const RegularizationReport report = regularizeSurfaces(r);
+  const auto radius = [&](std::size_t i) { return r.surfaces[i].as<CylinderSurface>()->radius; };
+  EXPECT_NE(radius(0), radius(1));
+  EXPECT_EQ(radius(0), radius(2));  // 0.004 apart: the same value
+  EXPECT_NEAR(radius(0), 4.002, 1e-12);
   EXPECT_EQ(report.equalRadii, 2);
 }
 
