@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <map>
+#include <numbers>
 
 namespace csgvox {
 namespace {
@@ -89,6 +91,80 @@ CsgTree throughCut(const CsgTree& tool, const CsgTree& root, double snap) {
   return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
 }
 
+// How far past `from` along `dir` the solid ends, when it ends within
+// `snap` (and holds `from`); -1 otherwise.
+double exitWithin(const CsgTree& solid, const Vec3& from, const Vec3& dir, double snap) {
+  if (solid.value(from) < 0.0) return -1.0;
+  constexpr int kSteps = 16;
+  for (int k = 1; k <= kSteps; ++k) {
+    const double s = snap * k / kSteps;
+    if (solid.value(from + s * dir) < 0.0) return s;
+  }
+  return -1.0;
+}
+
+// A subtracted box or cylinder whose end face stops within `snap` of where
+// the cut solid ends (along the face's normal) leaves a skin thinner than
+// voxels can see: a hole that should go through a shaft stops short of its
+// curved surface, and OpenSCAD then renders a closed cavity. The face is
+// moved one `snap` past the farthest exit measured at its centre and rim.
+CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
+  if (snap <= 0.0 || tool.root()->kind != NodeKind::Primitive) return tool;
+  const Primitive& prim = tool.root()->primitive;
+  if (const Cylinder* c = prim.as<Cylinder>()) {
+    const Mat3 frame = frameFromAxis(c->axis);
+    Cylinder grown = *c;
+    bool changed = false;
+    for (const double sign : {-1.0, 1.0}) {
+      const Vec3 dir = sign * c->axis;
+      const Vec3 face = c->center + 0.5 * c->height * dir;
+      double reach = -1.0;
+      bool all = true;
+      for (int k = -1; k < 8 && all; ++k) {
+        const double a = k * std::numbers::pi / 4.0;
+        const Vec3 p = k < 0 ? face
+                             : face + 0.95 * c->radius *
+                                          (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
+        const double e = exitWithin(solid, p, dir, snap);
+        all = e >= 0.0;
+        reach = std::max(reach, e);
+      }
+      if (!all) continue;
+      grown.center += 0.5 * (reach + snap) * dir;
+      grown.height += reach + snap;
+      changed = true;
+    }
+    return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
+  }
+  if (const Box* b = prim.as<Box>()) {
+    Box grown = *b;
+    bool changed = false;
+    for (int axis = 0; axis < 3; ++axis) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (const double sign : {-1.0, 1.0}) {
+        const Vec3 dir = sign * b->axes.col(axis);
+        const Vec3 face = b->center + b->halfSize[axis] * dir;
+        double reach = -1.0;
+        bool all = true;
+        for (int k = 0; k < 9 && all; ++k) {
+          const double su = 0.95 * ((k % 3) - 1), sv = 0.95 * ((k / 3) - 1);
+          const Vec3 p = face + su * b->halfSize[u] * b->axes.col(u) +
+                         sv * b->halfSize[v] * b->axes.col(v);
+          const double e = exitWithin(solid, p, dir, snap);
+          all = e >= 0.0;
+          reach = std::max(reach, e);
+        }
+        if (!all) continue;
+        grown.center += 0.5 * (reach + snap) * dir;
+        grown.halfSize[axis] += 0.5 * (reach + snap);
+        changed = true;
+      }
+    }
+    return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
+  }
+  return tool;
+}
+
 CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates, double snap) {
   std::vector<CsgTree> inter{candidates[m.root]};
   std::vector<CsgTree> sub;
@@ -101,6 +177,7 @@ CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates, double 
   }
   CsgTree t = inter.size() == 1 ? inter.front() : CsgTree::intersect(inter);
   if (sub.empty()) return t;
+  for (CsgTree& tool : sub) tool = throughSkin(tool, t, snap);
   sub.insert(sub.begin(), t);
   return CsgTree::subtract(sub);
 }
@@ -336,7 +413,9 @@ Construction constructCsg(std::span<const CsgTree> candidates,
   CsgTree tree = parts.size() == 1 ? parts.front() : CsgTree::unite(parts);
   if (!lifted.empty()) {
     std::vector<CsgTree> ops{tree};
-    for (std::uint32_t l : lifted) ops.push_back(candidates[l]);
+    for (std::uint32_t l : lifted) {
+      ops.push_back(throughSkin(candidates[l], tree, options.snapDistance));
+    }
     tree = CsgTree::subtract(ops);
   }
   out.tree = tree;

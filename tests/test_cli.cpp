@@ -2,7 +2,10 @@
 // naming the file, no partial outputs, and the sample/eval/render round trip
 // on every bundled part.
 
+#include "io/mesh_solid.h"
+#include "io/triangle_mesh.h"
 #include "part_list.h"
+#include "test_helpers.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -316,6 +319,50 @@ TEST_P(CliRoundTrip, NoisySampleErrorIsTheNoise) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BundledParts, CliRoundTrip, ::testing::ValuesIn(test::partNames()),
+                         [](const auto& info) { return info.param; });
+
+// ---- the main job's outputs in OpenSCAD --------------------------------------
+
+bool haveOpenScad() { return std::system("openscad --version > /dev/null 2>&1") == 0; }
+
+class MainJobScad : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override { dir_ = test::freshTempDir("mainjob-scad-" + GetParam()); }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+// What a user does with the result: open OUTDIR/tree.scad in OpenSCAD. It
+// must render the solid that OUTDIR/mesh.ply shows.
+TEST_P(MainJobScad, TreeScadRendersTheSolidOfMeshPly) {
+  if (!haveOpenScad()) {
+    GTEST_SKIP() << "openscad is not installed (scripts/install-deps.sh installs it)";
+  }
+  const fs::path out = dir_ / "out";
+  const RunResult r = run("'" + (test::dataDir() / GetParam() / "scan_noisy.ply").string() +
+                              "' -q -o '" + out.string() + "'",
+                          dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string cmd = "openscad -o '" + (dir_ / "openscad.stl").string() + "' '" +
+                          (out / "tree.scad").string() + "' > '" + (dir_ / "log.txt").string() +
+                          "' 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << "openscad failed, see " << (dir_ / "log.txt");
+  const TriangleMesh scad = readMesh(dir_ / "openscad.stl");
+  const TriangleMesh mesh = readMesh(out / "mesh.ply");
+  Aabb box = mesh.bounds();
+  const Aabb sb = scad.bounds();
+  box.min = box.min.cwiseMin(sb.min);
+  box.max = box.max.cwiseMax(sb.max);
+  const double voxel = box.diagonal() / 400.0;
+  const MeshSolid scadSolid(scad, voxel), meshSolid(mesh, voxel);
+  const double iou = test::sampledIou(
+      box, [&](const Vec3& p) { return scadSolid.contains(p); },
+      [&](const Vec3& p) { return meshSolid.contains(p); }, 200000, 3);
+  EXPECT_GE(iou, 0.99);
+  RecordProperty("iou", std::to_string(iou));
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledParts, MainJobScad, ::testing::ValuesIn(test::partNames()),
                          [](const auto& info) { return info.param; });
 
 }  // namespace
