@@ -221,16 +221,21 @@ double pruneMembers(std::vector<Member>& members, const VoxelSet& inside, double
   return energy;
 }
 
-// Phase 1 builds each subtree for its own root and phase 2 then picks
-// members independently among the subtrees free of outside voxels, so a
-// root that cut too much gets its loss covered by extra members, and a
-// subtree a few mislabelled voxels short of clean is never offered. This
-// local search over the whole union repairs both with three moves, each
-// followed by pruning the members that no longer pay: drop one action of a
-// member, or add one subtree from `extra` (every subtree phase 1 built,
-// clean or not). A move is kept when the global energy falls.
+// Phase 1 builds each subtree for its own root against its own neighbours
+// and phase 2 then picks members independently among the subtrees free of
+// outside voxels. So a root that cut too much gets its loss covered by
+// extra members, a subtree a few mislabelled voxels short of clean is never
+// offered, and an action that only pays for the union as a whole (a chamfer
+// cone cutting a boss that another member's fillet meets) is never tried.
+// This local search over the whole union repairs all three with five
+// moves, each followed by pruning the members that no longer pay: drop one
+// action of a member; add one of `extra` (every subtree phase 1 built,
+// clean or not, and every bare candidate) as a member; add one candidate to
+// a member as an intersection or a subtraction, or put one in place of an
+// action's candidate (the best such move of each round). A move is kept when the global energy falls, so the search ends.
 void refineUnion(std::vector<Member>& members, const std::vector<Member>& extra,
                  std::span<const DescriptionSet> d, const VoxelSet& inside, double cost) {
+  const std::size_t insideCount = inside.count();
   double energy = unionEnergy(members, inside, cost);
   energy = pruneMembers(members, inside, cost, energy);
   const auto tryMove = [&](std::vector<Member>& trial) {
@@ -261,6 +266,78 @@ void refineUnion(std::vector<Member>& members, const std::vector<Member>& extra,
       if (present || VoxelSet::countAnd(extra[k].voxels, inside) == 0) continue;
       std::vector<Member> trial = members;
       trial.push_back(extra[k]);
+      improved = tryMove(trial);
+    }
+    if (improved) continue;
+    // The best new action over all members and candidates.
+    std::size_t prims = 0;
+    for (const Member& m : members) prims += memberPrimitives(m);
+    double bestEnergy = energy - 1e-9;
+    std::size_t bestMember = 0;
+    SubtreeAction bestAction;
+    bool found = false;
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      VoxelSet rest(inside.size());
+      for (std::size_t j = 0; j < members.size(); ++j) {
+        if (j != i) rest |= members[j].voxels;
+      }
+      const double base = cost * double(prims + 1);
+      for (std::uint32_t k = 0; k < d.size(); ++k) {
+        if (k == members[i].root || !VoxelSet::intersects(d[k].voxels, members[i].voxels)) continue;
+        for (const bool subtract : {true, false}) {
+          VoxelSet v = subtract ? members[i].voxels - d[k].voxels : members[i].voxels & d[k].voxels;
+          v |= rest;
+          const double e = base + double(v.count() + insideCount) -
+                           2.0 * double(VoxelSet::countAnd(v, inside));
+          if (e < bestEnergy) {
+            bestEnergy = e;
+            bestMember = i;
+            bestAction = SubtreeAction{k, subtract};
+            found = true;
+          }
+        }
+      }
+    }
+    // Or the best replacement of one action's candidate by another, with
+    // the same operation (a better fit of the same surface).
+    std::size_t bestSlot = std::size_t(-1);
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      VoxelSet rest(inside.size());
+      for (std::size_t j = 0; j < members.size(); ++j) {
+        if (j != i) rest |= members[j].voxels;
+      }
+      const double base = cost * double(prims);
+      for (std::size_t a = 0; a < members[i].actions.size(); ++a) {
+        const SubtreeAction old = members[i].actions[a];
+        const VoxelSet without = memberVoxels(members[i], d, a);
+        for (std::uint32_t k = 0; k < d.size(); ++k) {
+          if (k == old.primitive || k == members[i].root ||
+              !VoxelSet::intersects(d[k].voxels, without)) {
+            continue;
+          }
+          VoxelSet v = old.subtract ? without - d[k].voxels : without & d[k].voxels;
+          v |= rest;
+          const double e = base + double(v.count() + insideCount) -
+                           2.0 * double(VoxelSet::countAnd(v, inside));
+          if (e < bestEnergy) {
+            bestEnergy = e;
+            bestMember = i;
+            bestSlot = a;
+            bestAction = SubtreeAction{k, old.subtract};
+            found = true;
+          }
+        }
+      }
+    }
+    if (found) {
+      std::vector<Member> trial = members;
+      Member& m = trial[bestMember];
+      if (bestSlot == std::size_t(-1)) {
+        m.actions.push_back(bestAction);
+      } else {
+        m.actions[bestSlot] = bestAction;
+      }
+      m.voxels = memberVoxels(m, d);
       improved = tryMove(trial);
     }
   }
@@ -367,7 +444,9 @@ Construction constructCsg(std::span<const CsgTree> candidates,
 
   if (options.refine) {
     std::vector<Member> extra;
-    for (std::uint32_t i : usable) extra.push_back(Member{i, {}, d[i].voxels});
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if (d[i].plus > 0 && !d[i].exceedsGrid) extra.push_back(Member{i, {}, d[i].voxels});
+    }
     for (std::size_t r = 0; r < truncate.size(); ++r) {
       if (!subtrees[r].voxels.none()) {
         extra.push_back(Member{truncate[r], subtrees[r].actions, subtrees[r].voxels});

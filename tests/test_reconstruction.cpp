@@ -25,9 +25,13 @@ struct KnownGap {
   const char* reason;
 };
 
-// Filled from measurement; every entry states why voxels alone fail there.
-constexpr KnownGap kKnownGaps[] = {
-    {"", "", ""},
+// From measurement; every entry states why the voxel stage fails there.
+const std::vector<KnownGap> kKnownGaps = {
+    {"funnel", "scan_noisy.ply",
+     "the noisy fits of the bowl's outer and inner cones are 0.7 and 0.6 off the true surfaces "
+     "at mid-height, both towards the wall's middle (measured at z = 60: outer radius 32.6 vs "
+     "33.3, inner 26.6 vs 26.0), so the 6 mm wall comes out 1.3 mm thinner: IoU 0.865 with 9 "
+     "primitives (truth 5); the voxel stage cannot move a fitted surface"},
 };
 
 const KnownGap* knownGap(const std::string& part, const std::string& scan) {
@@ -85,6 +89,9 @@ TEST_P(ReconstructionVsTruth, VolumeAndPrimitiveCount) {
   if (const KnownGap* g = knownGap(c.part, c.scan)) {
     EXPECT_FALSE(passes) << c.part << "/" << c.scan
                          << " reaches the bar now: remove it from kKnownGaps";
+    // A known gap must not get worse unnoticed.
+    EXPECT_TRUE(rec.ok()) << rec.message;
+    EXPECT_GE(iou, 0.85);
     std::printf("known gap: %s\n", g->reason);
     return;
   }

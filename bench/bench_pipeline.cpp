@@ -1,0 +1,155 @@
+// The whole reconstruction on synthetic scans of a bundled part at several
+// sizes and grid resolutions: time per pipeline stage, the tree's size, and
+// peak memory; then the two steps the CLI runs after the pipeline, meshing the
+// tree at res 160 (mesh.ply, without writing it) and the fit metrics.
+// Run: build/bench/bench_pipeline [data/<part>/tree.json] [noise]
+//
+// Peak memory: getrusage's maxrss only ever grows within a process, so each
+// row runs in a child process of its own (fork) that starts small, before the
+// parent has built anything large or started TBB's threads. A row's figures
+// are therefore its own: peak RSS of sampling the scan plus the pipeline
+// (pipe_MiB), and of all of it plus meshing and the fit metrics (peak_MiB).
+
+#include "io/mesh_export.h"
+#include "io/tree_json.h"
+#include "pipeline/reconstruct.h"
+#include "primitives/fit_metrics.h"
+#include "primitives/surface_sampler.h"
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <string>
+
+namespace {
+
+using namespace csgvox;
+
+double seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+double peakMiB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+// User + system CPU seconds of the whole process so far, all threads.
+double cpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// Seconds of one stage of reconstruct(), or -1 when it did not run.
+double stageSeconds(const Reconstruction& rec, const char* stage) {
+  for (const StageTime& t : rec.timings) {
+    if (t.stage == stage) return t.seconds;
+  }
+  return -1.0;
+}
+
+// One row of the table: sample, reconstruct, mesh, fit. Returns the exit code.
+int runRow(const CsgTree& part, std::size_t points, int resolution, double noise) {
+  SampleOptions so;
+  so.points = points;
+  so.noise = noise;
+  so.seed = 1;
+  const PointCloud scan = sampleSurface(part, so).cloud;
+
+  ReconstructOptions ro;
+  ro.resolution = resolution;
+  ro.seed = 1;
+  const double cpu0 = cpuSeconds();
+  const auto t0 = std::chrono::steady_clock::now();
+  const Reconstruction rec = reconstruct(scan, ro);
+  const double total = seconds(t0);
+  const double cpu = cpuSeconds() - cpu0;
+  const double pipelinePeak = peakMiB();
+
+  double mesh = -1.0;
+  double fit = -1.0;
+  if (rec.ok()) {
+    // As the CLI does: mesh.ply at its default --mesh-res, then the metrics.
+    auto t = std::chrono::steady_clock::now();
+    MeshOptions mo;
+    mo.resolution = 160;
+    const TriangleMesh triangles = meshTree(rec.tree, mo);
+    mesh = seconds(t);
+    t = std::chrono::steady_clock::now();
+    FitOptions fo;
+    fo.surfaceSamples = 100000;
+    fo.seed = 1;
+    const FitMetrics metrics = evaluateFit(rec.tree, scan, fo);
+    fit = seconds(t);
+    if (triangles.triangles.empty() || metrics.points != scan.size()) return 1;
+  }
+  std::printf("%8zu %4d %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %6zu %9.0f | %9.3f %9.3f %9.3f %9.0f",
+              points, resolution, stageSeconds(rec, "detect"), stageSeconds(rec, "hypotheses"),
+              stageSeconds(rec, "labels"), stageSeconds(rec, "description_sets"),
+              stageSeconds(rec, "optimisation"), total, cpu, rec.tree.primitiveCount(), pipelinePeak,
+              mesh, fit, rec.ok() ? total + mesh + fit : -1.0, peakMiB());
+  if (!rec.ok()) std::printf("  (%s)", rec.message.c_str());
+  std::printf("\n");
+  std::fflush(stdout);
+  return rec.ok() ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string treePath =
+      argc > 1 ? argv[1] : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
+  const double noise = argc > 2 ? std::atof(argv[2]) : 0.0;
+  const CsgTree part = readTreeJson(std::filesystem::path(treePath));
+  std::printf("part %s, noise %.4f D, %zu primitives\n", treePath.c_str(), noise,
+              part.primitiveCount());
+  std::printf("pipeline stages and total (reconstruct()), wall-clock seconds; cpu_s: CPU seconds "
+              "of reconstruct(), all threads\n");
+  std::printf("then what the CLI runs after it: meshTree at res 160, evaluateFit (100k samples); "
+              "e2e = total + mesh + fit\n");
+  std::printf("peak memory per row, each row in a child process of its own "
+              "(pipe: sampling + pipeline; peak: also mesh + fit); -1: not run\n");
+  std::printf("%8s %4s %9s %9s %9s %9s %9s %9s %9s %6s %9s | %9s %9s %9s %9s\n", "points", "res",
+              "detect_s", "hypoth_s", "labels_s", "dsets_s", "optim_s", "total_s", "cpu_s", "prims",
+              "pipe_MiB", "mesh160_s", "fit_s", "e2e_s", "peak_MiB");
+  int failures = 0;
+  for (std::size_t n : {50000u, 100000u, 500000u}) {
+    for (int res : {64, 128}) {
+      std::fflush(stdout);  // the child must not print the parent's buffer again
+      const pid_t child = fork();
+      if (child < 0) {
+        std::perror("fork");
+        return 1;
+      }
+      if (child == 0) {
+        int code = 1;
+        try {
+          code = runRow(part, n, res, noise);
+        } catch (const std::exception& e) {
+          std::printf("%8zu %4d failed: %s\n", n, res, e.what());
+        }
+        std::fflush(stdout);
+        _exit(code);
+      }
+      int status = 0;
+      if (waitpid(child, &status, 0) < 0) {
+        std::perror("waitpid");
+        return 1;
+      }
+      if (!WIFEXITED(status)) {
+        std::printf("%8zu %4d killed by signal %d\n", n, res,
+                    WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+      }
+      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) ++failures;
+    }
+  }
+  return failures == 0 ? 0 : 1;
+}
