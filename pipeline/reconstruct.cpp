@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 
 namespace csgvox {
@@ -43,6 +44,77 @@ class StageClock {
 };
 
 }  // namespace
+
+// The frame of the voxel grid. Voxels aligned with the part's faces see
+// them without staircase aliasing, but the minimal oriented box of a noisy
+// scan comes out tilted by a fraction of a degree (its volume is flat near
+// the minimum), and an L-shaped part's can even turn diagonal. So the frame
+// comes from the detected surfaces: the direction (plane normal or axis)
+// with most inliers, then the heaviest direction orthogonal to it within
+// two degrees. The minimal box is kept when no surface gives a direction or
+// when the aligned box is more than a quarter larger.
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces) {
+  const OrientedBox minimal = minimalOrientedBox(scan.points);
+  struct Direction {
+    Vec3 dir;
+    double weight;
+  };
+  std::vector<Direction> dirs;
+  const double cosParallel = std::cos(2.0 * std::numbers::pi / 180.0);
+  for (const Surface& s : surfaces) {
+    Vec3 d;
+    if (const auto* p = s.as<PlaneSurface>()) {
+      d = p->normal;
+    } else if (const auto* c = s.as<CylinderSurface>()) {
+      d = c->axisDir;
+    } else if (const auto* c = s.as<ConeSurface>()) {
+      d = c->axisDir;
+    } else if (const auto* t = s.as<TorusSurface>()) {
+      d = t->axisDir;
+    } else {
+      continue;
+    }
+    if (!(d.norm() > 0.0)) continue;
+    d.normalize();
+    const double w = double(s.inliers.size());
+    auto same = std::find_if(dirs.begin(), dirs.end(), [&](const Direction& o) {
+      return std::abs(o.dir.dot(d)) >= cosParallel;
+    });
+    if (same != dirs.end()) {
+      same->weight += w;
+    } else {
+      dirs.push_back({d, w});
+    }
+  }
+  if (dirs.empty()) return minimal;
+  std::stable_sort(dirs.begin(), dirs.end(),
+                   [](const Direction& a, const Direction& b) { return a.weight > b.weight; });
+  const Vec3 a1 = dirs.front().dir;
+  const double sinOrthogonal = std::sin(2.0 * std::numbers::pi / 180.0);
+  Vec3 a2 = Vec3::Zero();
+  for (const Direction& d : dirs) {
+    if (std::abs(d.dir.dot(a1)) <= sinOrthogonal) {
+      a2 = d.dir;
+      break;
+    }
+  }
+  if (a2 == Vec3::Zero()) {
+    // Only one direction: the minimal box's axis most orthogonal to it.
+    double best = 2.0;
+    for (int k = 0; k < 3; ++k) {
+      const double c = std::abs(minimal.axes.col(k).dot(a1));
+      if (c < best) best = c, a2 = minimal.axes.col(k);
+    }
+  }
+  a2 = (a2 - a2.dot(a1) * a1).normalized();
+  Mat3 frame;
+  frame.col(0) = a1;
+  frame.col(1) = a2;
+  frame.col(2) = a1.cross(a2);
+  const OrientedBox aligned = boxAlong(scan.points, frame);
+  const double volume = aligned.halfSize.prod(), minimalVolume = minimal.halfSize.prod();
+  return volume <= 1.25 * minimalVolume ? aligned : minimal;
+}
 
 double Reconstruction::voxelIou() const {
   const std::size_t either = VoxelSet::countOr(construction.voxels, labels.inside);
@@ -89,7 +161,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   clock.start("hypotheses");
   GridOptions go;
   go.resolution = options.resolution;
-  out.grid = VoxelGrid::around(minimalOrientedBox(scan.points), go);
+  out.grid = VoxelGrid::around(gridBox(scan, out.detection.surfaces), go);
   HypothesisOptions ho;
   ho.voxelSize = out.grid.voxelSize();
   ho.seed = std::uint32_t(options.seed);

@@ -15,6 +15,7 @@
 #include "voxel/voxel_grid.h"
 
 #include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -76,6 +77,12 @@ struct Reconstruction {
 /// summary of what it produced at the end.
 using StageCallback = std::function<void(std::string_view stage, bool done,
                                          const std::string& summary)>;
+
+/// The box the voxel grid is laid over: aligned with the heaviest surface
+/// direction (plane normal or axis) and the heaviest one orthogonal to it,
+/// or the scan's minimal oriented box when the surfaces give no direction or
+/// the aligned box is over a quarter larger.
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces);
 
 /// Runs the whole reconstruction on an oriented scan.
 /// @throw std::invalid_argument when the scan has no normals or is empty.

@@ -99,6 +99,7 @@ struct HypothesisOptions {
   double quarterTolerance = 15.0;  ///< degrees; a cylinder patch of 90 +- this is a quarter
   bool extendToCaps = true;        ///< also cylinders extended to a cap past a chamfer
   bool snapToPlanes = true;        ///< cylinder ends onto the fitted planes that cap or cross them
+  bool extendOpenEnds = true;      ///< also cylinders run out to the scan's extent past ends on no plane
   std::uint32_t seed = 1;          ///< seed of CGAL's bounding-box search
 };
 
@@ -151,7 +152,7 @@ struct HypothesisStats {
   std::size_t duplicatesRemoved = 0;  ///< candidates dropped as duplicates
   std::size_t ownBoundsDropped = 0;   ///< additional boxes equal to their quadric's own box
   std::size_t quarterCylinders = 0;   ///< cylinder patches given a maximal box
-  std::size_t extendedCylinders = 0;  ///< cylinders extended to a cap plane
+  std::size_t extendedCylinders = 0;  ///< cylinders extended to a cap plane or past an open end
   std::size_t skippedSurfaces = 0;    ///< too few inliers or invalid parameters
   bool capped = false;                ///< maxCandidates removed candidates
   double voxelSize = 0.0;             ///< fit threshold used, scan units

@@ -17,6 +17,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -99,6 +100,7 @@ struct Quadric {
   Vec3 axis = Vec3::UnitZ();      // unit
   Vec3 axisPoint = Vec3::Zero();  // origin of the axial coordinate t
   Range extent;                   // of the inliers along the axis (t)
+  std::array<bool, 2> capped{false, false};  // lower, upper end on a fitted plane
 };
 
 // The bounded primitive of a surface from its inliers; nullopt when the
@@ -342,9 +344,15 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
       }
       if (rim >= 3) best = t;
     }
-    if (std::isfinite(best)) (upper ? extent.hi : extent.lo) = best;
+    if (std::isfinite(best)) {
+      (upper ? extent.hi : extent.lo) = best;
+      q.capped[upper ? 1 : 0] = true;
+    }
   }
-  if (!(extent.size() > 0.5 * q.extent.size())) return;
+  if (!(extent.size() > 0.5 * q.extent.size())) {
+    q.capped = {false, false};
+    return;
+  }
   q.extent = extent;
   q.primitive = Cylinder{q.axisPoint + 0.5 * (extent.lo + extent.hi) * q.axis, q.axis,
                          cyl->radius, extent.size()};
@@ -437,6 +445,27 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
         out.push_back(makeCandidate(CsgTree::leaf(Cylinder{q.axisPoint + 0.5 * (lo + hi) * q.axis,
                                                            q.axis, cyl->radius, hi - lo}),
                                     CandidateOrigin::Quadric, std::move(used), support));
+        ++stats.extendedCylinders;
+      }
+    }
+
+    // A cylinder whose end meets no fitted plane may go on, unseen, inside
+    // another solid that bounds it (a knob's body under its dome, a pin in
+    // a ball): the same cylinder run out to the scan's extent along its
+    // axis at each such end, for an intersection to cut.
+    if (const auto* cyl = q.primitive.as<Cylinder>();
+        cyl != nullptr && ctx.options.extendOpenEnds && !(q.capped[0] && q.capped[1])) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (const Vec3& p : ctx.scan.points) {
+        const double t = (p - q.axisPoint).dot(q.axis);
+        lo = std::min(lo, t), hi = std::max(hi, t);
+      }
+      if (q.capped[0]) lo = q.extent.lo;
+      if (q.capped[1]) hi = q.extent.hi;
+      if (hi - lo > q.extent.size() + ctx.voxel) {
+        out.push_back(makeCandidate(CsgTree::leaf(Cylinder{q.axisPoint + 0.5 * (lo + hi) * q.axis,
+                                                           q.axis, cyl->radius, hi - lo}),
+                                    CandidateOrigin::Quadric, {index}, support));
         ++stats.extendedCylinders;
       }
     }

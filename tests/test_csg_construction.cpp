@@ -8,7 +8,9 @@
 // cones, stepped_shaft keeps 4 of 8 primitives (IoU 0.80), funnel noisy
 // reaches 0.81. Run with --gtest_also_run_disabled_tests.
 
+#include "candidate_matching.h"
 #include "io/tree_json.h"
+#include "pipeline/reconstruct.h"
 #include "optimize/csg_construction.h"
 #include "part_list.h"
 #include "primitives/surface_sampler.h"
@@ -49,7 +51,9 @@ Rebuilt rebuild(const CsgTree& truth, double noise, LabelMethod method) {
   so.noise = noise;
   so.seed = 3;
   const SurfaceSample scan = sampleSurface(truth, so);
-  const VoxelGrid grid = VoxelGrid::around(minimalOrientedBox(scan.cloud.points), {});
+  // The grid frame as the pipeline picks it, from the true surfaces.
+  const test::GroundTruth gt = test::makeGroundTruth(truth);
+  const VoxelGrid grid = VoxelGrid::around(gridBox(scan.cloud, gt.surfaces), {});
   LabelOptions lo;
   lo.method = method;
   const VoxelLabels labels = labelVoxels(grid, scan.cloud, lo);
@@ -70,11 +74,23 @@ Rebuilt rebuild(const CsgTree& truth, double noise, LabelMethod method) {
 
 class ConstructFromTruePrimitives : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(ConstructFromTruePrimitives, DISABLED_RebuildsThePart) {
+TEST_P(ConstructFromTruePrimitives, RebuildsThePart) {
+  if (GetParam() == "knob") {
+    // Both true primitives of the knob's body reach past the scan (the
+    // cylinder runs on under the dome, the dome's sphere is wider than the
+    // part) and so touch the grid's border: Wu's rule (mu) lets neither be
+    // a root. The pipeline's own candidates are clipped to the scan's extent
+    // and rebuild the knob exactly (test_reconstruction).
+    const CsgTree truth = readTreeJson(test::dataDir() / "knob" / "tree.json");
+    const Rebuilt r = rebuild(truth, 0.0, LabelMethod::WindingNumber);
+    EXPECT_TRUE(r.tree.empty());
+    EXPECT_EQ(r.stats.usableRoots + r.stats.truncationRoots, 0u);
+    return;
+  }
   const CsgTree truth = readTreeJson(test::dataDir() / GetParam() / "tree.json");
   for (double noise : {0.0, 0.005}) {
     const Rebuilt r = rebuild(truth, noise, LabelMethod::WindingNumber);
-    ASSERT_FALSE(r.tree.empty()) << GetParam();
+    ASSERT_FALSE(r.tree.empty()) << GetParam() << " noise " << noise << ": roots " << r.stats.usableRoots << "+" << r.stats.truncationRoots << ", subtrees " << r.stats.subtrees << ", union candidates " << r.stats.unionCandidates << ", chosen " << r.stats.chosen;
     const double iou = volumetricIoU(truth, r.tree, 200000, 9);
     RecordProperty(noise > 0 ? "iou_noisy" : "iou_clean", std::to_string(iou));
     std::printf("%-18s noise %.3f: label IoU %.4f, tree IoU %.4f, %zu primitives (truth %zu), "

@@ -30,6 +30,11 @@ OrientedBox minimalOrientedBox(std::span<const Vec3> points) {
   // Re-orthonormalise (the transformation is a rotation up to rounding).
   Eigen::JacobiSVD<Mat3> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Mat3 axes = (svd.matrixU() * svd.matrixV().transpose()).transpose();
+  return boxAlong(points, axes);
+}
+
+OrientedBox boxAlong(std::span<const Vec3> points, const Mat3& frame) {
+  const Mat3& axes = frame;
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   for (const Vec3& p : points) {
     const Vec3 q = axes.transpose() * p;

@@ -22,6 +22,10 @@ struct OrientedBox {
 /// @throw std::invalid_argument for fewer than 4 points.
 OrientedBox minimalOrientedBox(std::span<const Vec3> points);
 
+/// The bounding box of points in a given orthonormal frame (columns), with
+/// the axes ordered longest first and made right-handed.
+OrientedBox boxAlong(std::span<const Vec3> points, const Mat3& frame);
+
 /// Options of VoxelGrid::around.
 struct GridOptions {
   int resolution = 64;      ///< voxels along the longest side of the box
