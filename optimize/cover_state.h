@@ -8,9 +8,20 @@
 
 #include <bit>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace csgvox {
+
+/// Indices of the non-zero 64-bit words of a set.
+inline std::vector<std::uint32_t> nonZeroWords(const VoxelSet& s) {
+  std::vector<std::uint32_t> out;
+  const auto words = s.words();
+  for (std::size_t w = 0; w < words.size(); ++w) {
+    if (words[w]) out.push_back(std::uint32_t(w));
+  }
+  return out;
+}
 
 /// Coverage counts over a universe of `size` voxels.
 class CoverState {
@@ -26,17 +37,40 @@ class CoverState {
   void add(const VoxelSet& s) { update(s, +1); }
   void remove(const VoxelSet& s) { update(s, -1); }
 
+  // The same on the words `words` of `s` only: the indices of its non-zero
+  // words (see nonZeroWords). A sparse set then costs its own size, not the
+  // universe's.
+  std::size_t gain(const VoxelSet& s, std::span<const std::uint32_t> words) const {
+    const auto a = s.words(), c = covered_.words();
+    std::size_t n = 0;
+    for (std::uint32_t w : words) n += std::size_t(std::popcount(a[w] & ~c[w]));
+    return n;
+  }
+  std::size_t loss(const VoxelSet& s, std::span<const std::uint32_t> words) const {
+    const auto a = s.words(), o = once_.words();
+    std::size_t n = 0;
+    for (std::uint32_t w : words) n += std::size_t(std::popcount(a[w] & o[w]));
+    return n;
+  }
+  void add(const VoxelSet& s, std::span<const std::uint32_t> words) { update(s, words, +1); }
+  void remove(const VoxelSet& s, std::span<const std::uint32_t> words) { update(s, words, -1); }
+
  private:
   void update(const VoxelSet& s, int delta) {
     const auto words = s.words();
-    for (std::size_t w = 0; w < words.size(); ++w) {
-      for (std::uint64_t bits = words[w]; bits; bits &= bits - 1) {
-        const std::size_t i = w * 64 + std::size_t(std::countr_zero(bits));
-        const int c = int(counts_[i]) + delta;
-        counts_[i] = std::uint32_t(c);
-        if (c > 0) covered_.set(i); else covered_.reset(i);
-        if (c == 1) once_.set(i); else once_.reset(i);
-      }
+    for (std::size_t w = 0; w < words.size(); ++w) updateWord(w, words[w], delta);
+  }
+  void update(const VoxelSet& s, std::span<const std::uint32_t> which, int delta) {
+    const auto words = s.words();
+    for (std::uint32_t w : which) updateWord(w, words[w], delta);
+  }
+  void updateWord(std::size_t w, std::uint64_t word, int delta) {
+    for (std::uint64_t bits = word; bits; bits &= bits - 1) {
+      const std::size_t i = w * 64 + std::size_t(std::countr_zero(bits));
+      const int c = int(counts_[i]) + delta;
+      counts_[i] = std::uint32_t(c);
+      if (c > 0) covered_.set(i); else covered_.reset(i);
+      if (c == 1) once_.set(i); else once_.reset(i);
     }
   }
 

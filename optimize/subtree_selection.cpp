@@ -23,6 +23,7 @@ struct LocalProblem {
   std::vector<VoxelSet> removesOut;  // ∩ outside
   std::vector<VoxelSet> removesIn;   // ∩ inside
   std::vector<std::size_t> actionIndex;  // useful action -> index 2i (+1 for subtract)
+  std::vector<std::vector<std::uint32_t>> words;  // per action: non-zero words of `removes`
   std::size_t insideCount = 0, outsideCount = 0;
   double invL = 0.0, alpha = 0.9;
 
@@ -105,9 +106,9 @@ double descend(const LocalProblem& pb, std::vector<std::uint8_t>& x) {
   std::size_t chosen = 0, lostIn = 0, lostOut = 0;
   for (std::size_t a = 0; a < x.size(); ++a) {
     if (!x[a]) continue;
-    lostIn += removed.gain(pb.removesIn[a]);
-    lostOut += removed.gain(pb.removesOut[a]);
-    removed.add(pb.removes[a]);
+    lostIn += removed.gain(pb.removesIn[a], pb.words[a]);
+    lostOut += removed.gain(pb.removesOut[a], pb.words[a]);
+    removed.add(pb.removes[a], pb.words[a]);
     ++chosen;
   }
   const auto energyOf = [&](std::size_t c, std::size_t in, std::size_t out) {
@@ -121,23 +122,23 @@ double descend(const LocalProblem& pb, std::vector<std::uint8_t>& x) {
     double bestE = e - 1e-12;
     for (std::size_t a = 0; a < x.size(); ++a) {
       const double f =
-          x[a] ? energyOf(chosen - 1, lostIn - removed.loss(pb.removesIn[a]),
-                          lostOut - removed.loss(pb.removesOut[a]))
-               : energyOf(chosen + 1, lostIn + removed.gain(pb.removesIn[a]),
-                          lostOut + removed.gain(pb.removesOut[a]));
+          x[a] ? energyOf(chosen - 1, lostIn - removed.loss(pb.removesIn[a], pb.words[a]),
+                          lostOut - removed.loss(pb.removesOut[a], pb.words[a]))
+               : energyOf(chosen + 1, lostIn + removed.gain(pb.removesIn[a], pb.words[a]),
+                          lostOut + removed.gain(pb.removesOut[a], pb.words[a]));
       if (f < bestE) bestE = f, bestFlip = a;
     }
     if (bestFlip == x.size()) return e;
     const std::size_t a = bestFlip;
     if (x[a]) {
-      lostIn -= removed.loss(pb.removesIn[a]);
-      lostOut -= removed.loss(pb.removesOut[a]);
-      removed.remove(pb.removes[a]);
+      lostIn -= removed.loss(pb.removesIn[a], pb.words[a]);
+      lostOut -= removed.loss(pb.removesOut[a], pb.words[a]);
+      removed.remove(pb.removes[a], pb.words[a]);
       --chosen;
     } else {
-      lostIn += removed.gain(pb.removesIn[a]);
-      lostOut += removed.gain(pb.removesOut[a]);
-      removed.add(pb.removes[a]);
+      lostIn += removed.gain(pb.removesIn[a], pb.words[a]);
+      lostOut += removed.gain(pb.removesOut[a], pb.words[a]);
+      removed.add(pb.removes[a], pb.words[a]);
       ++chosen;
     }
     x[a] ^= 1;
@@ -150,7 +151,7 @@ double localSearch(const LocalProblem& pb, std::vector<std::uint8_t>& best) {
   best.assign(n, 0);
   double bestE = descend(pb, best);
   std::mt19937_64 rng(12345);
-  for (int restart = 0; restart < 8; ++restart) {
+  for (int restart = 0; restart < 3; ++restart) {
     std::vector<std::uint8_t> x = best;
     for (std::size_t a = 0; a < n; ++a) {
       if (std::uniform_int_distribution<int>(0, 3)(rng) == 0) x[a] ^= 1;
@@ -212,6 +213,16 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
       VoxelSet removes = sub ? local : local.complemented();
       VoxelSet removesOut = removes & pb.outside;
       if (removesOut.none()) continue;
+      // An action removing k outside voxels improves the fit term by at most
+      // alpha * k / |V+(root)| in any solution (the denominator never drops
+      // below |V+(root)|, the numerator never exceeds it) and costs
+      // minFeatureVoxels / |V+(root)|: when alpha * k <= minFeatureVoxels it
+      // never pays for itself, so no optimum holds it. Exact, and on noisy
+      // labels it drops most actions.
+      if (options.minFeatureVoxels > 0.0 &&
+          pb.alpha * double(removesOut.count()) <= options.minFeatureVoxels) {
+        continue;
+      }
       const bool duplicate = std::any_of(pb.removes.begin(), pb.removes.end(),
                                          [&](const VoxelSet& r) { return r == removes; });
       if (duplicate) continue;
@@ -246,6 +257,7 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
     sorted.removesOut.push_back(std::move(pb.removesOut[a]));
     sorted.removesIn.push_back(std::move(pb.removesIn[a]));
     sorted.actionIndex.push_back(pb.actionIndex[a]);
+    sorted.words.push_back(nonZeroWords(sorted.removes.back()));
   }
 
   std::vector<std::uint8_t> best;
