@@ -103,7 +103,7 @@ double exitWithin(const CsgTree& solid, const Vec3& from, const Vec3& dir, doubl
   return -1.0;
 }
 
-// A subtracted box or cylinder whose end face stops within `snap` of where
+// A subtracted box, cylinder or cone whose end face stops within `snap` of where
 // the cut solid ends (along the face's normal) leaves a skin thinner than
 // voxels can see: a hole that should go through a shaft stops short of its
 // curved surface, and OpenSCAD then renders a closed cavity. The face is
@@ -132,6 +132,40 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
       if (!all) continue;
       grown.center += 0.5 * (reach + snap) * dir;
       grown.height += reach + snap;
+      changed = true;
+    }
+    return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
+  }
+  if (const Cone* c = prim.as<Cone>()) {
+    const Mat3 frame = frameFromAxis(c->axis);
+    const double slope = (c->radiusTop - c->radiusBottom) / c->height;
+    Cone grown = *c;
+    bool changed = false;
+    for (const double sign : {-1.0, 1.0}) {
+      const Vec3 dir = sign * c->axis;
+      const Vec3 face = c->center + 0.5 * c->height * dir;
+      const double radius = sign > 0.0 ? c->radiusTop : c->radiusBottom;
+      double reach = -1.0;
+      bool all = true;
+      for (int k = -1; k < 8 && all; ++k) {
+        const double a = k * std::numbers::pi / 4.0;
+        const Vec3 p = k < 0 ? face
+                             : face + 0.95 * radius *
+                                          (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
+        const double e = exitWithin(solid, p, dir, snap);
+        all = e >= 0.0;
+        reach = std::max(reach, e);
+      }
+      if (!all) continue;
+      // The frustum runs on along its own slope.
+      const double extra = reach + snap;
+      if (sign > 0.0) {
+        grown.radiusTop += slope * extra;
+      } else {
+        grown.radiusBottom = std::max(0.0, grown.radiusBottom - slope * extra);
+      }
+      grown.center += 0.5 * extra * dir;
+      grown.height += extra;
       changed = true;
     }
     return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
