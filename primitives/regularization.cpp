@@ -396,9 +396,13 @@ class Regularizer {
     }
     if (const auto* ca = a.as<ConeSurface>()) {
       const auto* cb = b.as<ConeSurface>();
+      // Two cones of one angle on one axis are parallel surfaces
+      // |apex shift| * sin(angle) apart: within the inlier band they are two
+      // fits of one surface (RANSAC splits a noisy cone into the inner and
+      // outer halves of its noise band).
       return ca->halfAngle == cb->halfAngle && ca->axisDir.dot(cb->axisDir) > 0.0 &&
              sameLine(ca->apex, ca->axisDir, cb->apex, cb->axisDir) &&
-             (ca->apex - cb->apex).norm() <= radiusTol_;
+             (ca->apex - cb->apex).norm() * std::sin(ca->halfAngle) <= radiusTol_;
     }
     if (const auto* sa = a.as<SphereSurface>()) {
       const auto* sb = b.as<SphereSurface>();
@@ -413,12 +417,30 @@ class Regularizer {
     return false;
   }
 
+  // Before two identical surfaces merge: the position that may still differ
+  // (a cone's apex, a sphere's or torus' centre) becomes the inlier-weighted
+  // mean of the two, as the parameters of merged planes and radii do.
+  void meanPosition(std::size_t into, std::size_t from) {
+    Surface& a = r_.surfaces[into];
+    const Surface& b = r_.surfaces[from];
+    const double wa = weightOf(a), wb = weightOf(b);
+    const auto mean = [&](Vec3& pa, const Vec3& pb) { pa = (wa * pa + wb * pb) / (wa + wb); };
+    if (auto* ca = std::get_if<ConeSurface>(&a.shape)) {
+      mean(ca->apex, std::get<ConeSurface>(b.shape).apex);
+    } else if (auto* sa = std::get_if<SphereSurface>(&a.shape)) {
+      mean(sa->center, std::get<SphereSurface>(b.shape).center);
+    } else if (auto* ta = std::get_if<TorusSurface>(&a.shape)) {
+      mean(ta->center, std::get<TorusSurface>(b.shape).center);
+    }
+  }
+
   void mergeIdentical() {
     for (std::size_t a = 0; a < r_.surfaces.size(); ++a) {
       if (!alive_[a] || r_.surfaces[a].type() == SurfaceType::Plane) continue;
       for (std::size_t b = a + 1; b < r_.surfaces.size(); ++b) {
         if (!alive_[b] || !identical(r_.surfaces[a], r_.surfaces[b])) continue;
         const std::size_t into = r_.surfaces[a].inliers.size() >= r_.surfaces[b].inliers.size() ? a : b;
+        meanPosition(into, into == a ? b : a);
         merge(into, into == a ? b : a);
         ++report_.duplicatesMerged;
         if (into == b) break;

@@ -731,6 +731,34 @@ TEST(Regularization, KeepsRadiiApartWhenTheFitsTellThemApart) {
   EXPECT_EQ(report.equalRadii, 2);
 }
 
+TEST(Regularization, MergesTheTwoHalvesOfASplitNoisyCone) {
+  // RANSAC can split a noisy cone into two fits of the same angle on the
+  // same axis, one on each half of the noise band: surfaces |apex shift| *
+  // sin(angle) apart. Within the inlier band (epsilon 0.5) they are one
+  // surface, at the inlier-weighted mean apex; farther apart they stay two.
+  const double angle = 0.6;
+  const auto cone = [&](double apexZ, std::size_t points) {
+    Surface s;
+    s.shape = ConeSurface{Vec3(0, 0, apexZ), Vec3::UnitZ(), angle};
+    s.inliers.resize(points);
+    s.convex = true;
+    return s;
+  };
+  DetectionResult r;
+  r.surfaces.push_back(cone(0.0, 300));
+  r.surfaces.push_back(cone(0.7, 100));   // 0.7 * sin(0.6) = 0.40 apart: the same surface
+  r.surfaces.push_back(cone(10.0, 200));  // 5.6 apart: another cone
+  finish(r);
+  const RegularizationReport report = regularizeSurfaces(r);
+  EXPECT_EQ(report.duplicatesMerged, 1);
+  ASSERT_EQ(r.surfaces.size(), 2u);
+  const auto* merged = r.surfaces[0].as<ConeSurface>();
+  ASSERT_NE(merged, nullptr);
+  EXPECT_EQ(r.surfaces[0].inliers.size(), 400u);
+  EXPECT_NEAR(merged->apex.z(), (0.0 * 300 + 0.7 * 100) / 400.0, 1e-12);
+  EXPECT_NEAR(r.surfaces[1].as<ConeSurface>()->apex.z(), 10.0, 1e-12);
+}
+
 TEST(Regularization, RotatedInputGivesTheRotatedResult) {
   // The same configuration in two frames: the same relations are found.
   std::vector<RegularizationReport> reports;
