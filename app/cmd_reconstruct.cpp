@@ -45,6 +45,8 @@ std::string fmt(const char* format, double a, double b = 0.0) {
 
 Command setupReconstruct(CLI::App& app, CommonOptions& common) {
   auto opt = std::make_shared<CommandOptions>();
+  // Show every default in --help.
+  app.option_defaults()->always_capture_default();
   app.add_option("SCAN", opt->scan,
                  "Scan to reconstruct: PLY, XYZ, XYZN point cloud, or OFF/OBJ/STL/PLY mesh")
       ->required();
