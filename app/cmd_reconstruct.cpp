@@ -95,10 +95,20 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     ro2.labels.method = labelMethodFromName(opt->labelMethod);
     ro2.labels.boundary = opt->boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
     const Reconstruction rec =
-        reconstruct(scan.cloud, ro2, [&](std::string_view stage, bool done,
-                                         const std::string& summary) {
-          if (done) console.info(std::string(stage) + ": " + summary);
-        });
+        reconstruct(
+            scan.cloud, ro2,
+            [&](std::string_view stage, bool done, const std::string& summary) {
+              if (done) console.info(std::string(stage) + ": " + summary);
+            },
+            [&, last = console.elapsed()](double fraction, std::string_view step) mutable {
+              // A line every few seconds while a stage runs long.
+              if (console.elapsed() - last >= 3.0) {
+                last = console.elapsed();
+                console.info("  " + std::string(step) + " " +
+                             std::to_string(int(100.0 * fraction)) + " %");
+              }
+              return true;
+            });
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
     if (rec.timeLimitHit) {

@@ -123,7 +123,7 @@ double Reconstruction::voxelIou() const {
 }
 
 Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options,
-                           const StageCallback& onStage) {
+                           const StageCallback& onStage, const ProgressCallback& progress) {
   if (scan.empty()) throw std::invalid_argument("the scan has no points");
   if (!scan.hasNormals()) throw std::invalid_argument("the scan has no normals");
   Reconstruction out;
@@ -144,7 +144,14 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   clock.start("detect");
   DetectOptions dopt = options.detect;
   dopt.seed = options.seed;
-  out.detection = detectSurfaces(scan, dopt, [&](double, std::string_view) {
+  // Detection stops at the deadline; the optimisation handles the deadline
+  // inside its solvers and keeps going with local search only.
+  const auto report = [&](double fraction, std::string_view step) {
+    if (progress) progress(fraction, step);
+    return true;
+  };
+  out.detection = detectSurfaces(scan, dopt, [&](double fraction, std::string_view step) {
+    report(fraction, step);
     return !pastDeadline();
   });
   if (out.detection.status == DetectionResult::Status::Cancelled) return timedOut("detection");
@@ -207,7 +214,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   if (co.snapDistance == 0.0) co.snapDistance = out.grid.voxelSize();
   co.subtree.deadline = std::min(co.subtree.deadline, deadline);
   co.unionChoice.deadline = std::min(co.unionChoice.deadline, deadline);
-  out.construction = constructCsg(candidates, descriptions, out.labels.inside, co);
+  out.construction = constructCsg(candidates, descriptions, out.labels.inside, co, report);
   out.timeLimitHit = pastDeadline();
   const ConstructStats& st = out.construction.stats;
   clock.finish(std::to_string(st.chosen) + " of " + std::to_string(st.unionCandidates) +

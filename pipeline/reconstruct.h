@@ -9,6 +9,7 @@
 #include "optimize/csg_construction.h"
 #include "primitives/hypotheses.h"
 #include "primitives/point_cloud.h"
+#include "primitives/progress.h"
 #include "primitives/surface_detection.h"
 #include "voxel/description_sets.h"
 #include "voxel/labeling.h"
@@ -84,9 +85,13 @@ using StageCallback = std::function<void(std::string_view stage, bool done,
 /// the aligned box is over a quarter larger.
 OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces);
 
-/// Runs the whole reconstruction on an oriented scan.
+/// Runs the whole reconstruction on an oriented scan. `progress`, when
+/// given, is called now and then inside the long stages (detection and the
+/// optimisation) with the fraction of the stage done and a short name of its
+/// current step. Its return value is ignored: timeLimit bounds a run.
 /// @throw std::invalid_argument when the scan has no normals or is empty.
 Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options = {},
-                           const StageCallback& onStage = {});
+                           const StageCallback& onStage = {},
+                           const ProgressCallback& progress = {});
 
 }  // namespace csgvox
