@@ -67,7 +67,26 @@ std::vector<Vec3> supportCorners(const CsgTree& solid) {
 
 // A subtracted box whose faces stop just short of the root's outer
 // boundary is grown through it (see ConstructOptions::snapDistance).
-CsgTree throughCut(const CsgTree& tool, const CsgTree& root, double snap) {
+// A skin's outer face that holds scan points is a real wall thinner than a
+// voxel, not an artefact: true when most probes (points on that face) have
+// a scan point near them.
+bool scanned(const ScannedAt& scannedAt, const std::vector<Vec3>& probes) {
+  if (!scannedAt || probes.empty()) return false;
+  std::size_t hits = 0;
+  for (const Vec3& p : probes) hits += scannedAt(p) ? 1 : 0;
+  return 2 * hits > probes.size();
+}
+
+// The centre of a face and four points a quarter of the way to its rim,
+// along u and v: far enough from the rim that a hole's cap has no scan
+// point near them, spread enough that one gap in a scanned wall's sampling
+// does not decide.
+std::vector<Vec3> innerProbes(const Vec3& centre, const Vec3& u, const Vec3& v) {
+  return {centre, centre + 0.25 * u, centre - 0.25 * u, centre + 0.25 * v, centre - 0.25 * v};
+}
+
+CsgTree throughCut(const CsgTree& tool, const CsgTree& root, double snap,
+                   const ScannedAt& scannedAt) {
   if (snap <= 0.0 || tool.root()->kind != NodeKind::Primitive) return tool;
   const Box* b = tool.root()->primitive.as<Box>();
   const std::vector<Vec3> corners = supportCorners(root);
@@ -81,6 +100,12 @@ CsgTree throughCut(const CsgTree& tool, const CsgTree& root, double snap) {
       double reach = -1e300;
       for (const Vec3& c : corners) reach = std::max(reach, dir.dot(c));
       if (face <= reach && reach - face <= snap) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const Vec3 outer = b->center + (b->halfSize[axis] + reach - face) * dir;
+        if (scanned(scannedAt, innerProbes(outer, b->halfSize[u] * b->axes.col(u),
+                                           b->halfSize[v] * b->axes.col(v)))) {
+          continue;
+        }
         const double extra = reach - face + 2.0 * snap;
         grown.center += 0.5 * extra * dir;
         grown.halfSize[axis] += 0.5 * extra;
@@ -108,7 +133,18 @@ double exitWithin(const CsgTree& solid, const Vec3& from, const Vec3& dir, doubl
 // voxels can see: a hole that should go through a shaft stops short of its
 // curved surface, and OpenSCAD then renders a closed cavity. The face is
 // moved one `snap` past the farthest exit measured at its centre and rim.
-CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
+CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap,
+                    const ScannedAt& scannedAt) {
+  // Where the solid ends past each inner probe of a face, if it does
+  // within `snap`: the skin's outer face, checked for scan points.
+  const auto skinScanned = [&](const std::vector<Vec3>& probes, const Vec3& dir) {
+    std::vector<Vec3> outer;
+    for (const Vec3& p : probes) {
+      const double e = exitWithin(solid, p, dir, snap);
+      if (e >= 0.0) outer.push_back(p + e * dir);
+    }
+    return 2 * outer.size() > probes.size() && scanned(scannedAt, outer);
+  };
   if (snap <= 0.0 || tool.root()->kind != NodeKind::Primitive) return tool;
   const Primitive& prim = tool.root()->primitive;
   if (const Cylinder* c = prim.as<Cylinder>()) {
@@ -129,7 +165,11 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
         all = e >= 0.0;
         reach = std::max(reach, e);
       }
-      if (!all) continue;
+      if (!all || skinScanned(innerProbes(face, c->radius * frame.col(0),
+                                          c->radius * frame.col(1)),
+                              dir)) {
+        continue;
+      }
       grown.center += 0.5 * (reach + snap) * dir;
       grown.height += reach + snap;
       changed = true;
@@ -156,7 +196,10 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
         all = e >= 0.0;
         reach = std::max(reach, e);
       }
-      if (!all) continue;
+      if (!all || skinScanned(innerProbes(face, radius * frame.col(0), radius * frame.col(1)),
+                              dir)) {
+        continue;
+      }
       // The frustum runs on along its own slope.
       const double extra = reach + snap;
       if (sign > 0.0) {
@@ -188,7 +231,11 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
           all = e >= 0.0;
           reach = std::max(reach, e);
         }
-        if (!all) continue;
+        if (!all || skinScanned(innerProbes(face, b->halfSize[u] * b->axes.col(u),
+                                            b->halfSize[v] * b->axes.col(v)),
+                                dir)) {
+          continue;
+        }
         grown.center += 0.5 * (reach + snap) * dir;
         grown.halfSize[axis] += 0.5 * (reach + snap);
         changed = true;
@@ -199,19 +246,20 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap) {
   return tool;
 }
 
-CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates, double snap) {
+CsgTree memberTree(const Member& m, std::span<const CsgTree> candidates, double snap,
+                   const ScannedAt& scannedAt) {
   std::vector<CsgTree> inter{candidates[m.root]};
   std::vector<CsgTree> sub;
   for (const SubtreeAction& a : m.actions) {
     if (a.subtract) {
-      sub.push_back(throughCut(candidates[a.primitive], candidates[m.root], snap));
+      sub.push_back(throughCut(candidates[a.primitive], candidates[m.root], snap, scannedAt));
     } else {
       inter.push_back(candidates[a.primitive]);
     }
   }
   CsgTree t = inter.size() == 1 ? inter.front() : CsgTree::intersect(inter);
   if (sub.empty()) return t;
-  for (CsgTree& tool : sub) tool = throughSkin(tool, t, snap);
+  for (CsgTree& tool : sub) tool = throughSkin(tool, t, snap, scannedAt);
   sub.insert(sub.begin(), t);
   return CsgTree::subtract(sub);
 }
@@ -521,13 +569,13 @@ Construction constructCsg(std::span<const CsgTree> candidates,
   }
   std::vector<CsgTree> parts;
   for (const Member& m : members) {
-    parts.push_back(memberTree(m, candidates, options.snapDistance));
+    parts.push_back(memberTree(m, candidates, options.snapDistance, options.scannedAt));
   }
   CsgTree tree = parts.size() == 1 ? parts.front() : CsgTree::unite(parts);
   if (!lifted.empty()) {
     std::vector<CsgTree> ops{tree};
     for (std::uint32_t l : lifted) {
-      ops.push_back(throughSkin(candidates[l], tree, options.snapDistance));
+      ops.push_back(throughSkin(candidates[l], tree, options.snapDistance, options.scannedAt));
     }
     tree = CsgTree::subtract(ops);
   }

@@ -8,10 +8,14 @@
 #include "primitives/progress.h"
 #include "voxel/description_sets.h"
 
+#include <functional>
 #include <span>
 #include <vector>
 
 namespace csgvox {
+
+/// True when the scan has a point near p.
+using ScannedAt = std::function<bool(const Vec3& p)>;
 
 /// Options of constructCsg.
 struct ConstructOptions {
@@ -30,6 +34,11 @@ struct ConstructOptions {
   /// distance inside the root's outer boundary is pushed out past it, so the
   /// cut goes through instead of leaving a skin thinner than voxels can see.
   double snapDistance = 0.0;
+  /// When set, a cut is pushed through a skin only where the skin's outer
+  /// face holds no scan points: a scanned face there is a real wall thinner
+  /// than a voxel (a sheet-metal box), not an artefact of a hole that stops
+  /// short.
+  ScannedAt scannedAt;
 };
 
 /// Counts reported by constructCsg.

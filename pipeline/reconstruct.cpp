@@ -1,5 +1,6 @@
 #include "pipeline/reconstruct.h"
 
+#include "primitives/nearest_neighbors.h"
 #include "primitives/regularization.h"
 #include "primitives/surface_refinement.h"
 
@@ -212,6 +213,16 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   clock.start("optimisation");
   ConstructOptions co = options.construct;
   if (co.snapDistance == 0.0) co.snapDistance = out.grid.voxelSize();
+  // Scan points decide whether a sub-voxel skin is a real wall.
+  const NearestNeighbors scanIndex(scan.points);
+  const double nearScan = std::max(0.5 * out.grid.voxelSize(), 3.0 * out.detection.noise);
+  if (!co.scannedAt) {
+    co.scannedAt = [&](const Vec3& p) {
+      double d2 = 0.0;
+      scanIndex.nearest(p, &d2);
+      return d2 <= nearScan * nearScan;
+    };
+  }
   co.subtree.deadline = std::min(co.subtree.deadline, deadline);
   co.unionChoice.deadline = std::min(co.unionChoice.deadline, deadline);
   out.construction = constructCsg(candidates, descriptions, out.labels.inside, co, report);

@@ -1,0 +1,429 @@
+// The whole reconstruction on the InverseCSG benchmark: 50 CAD meshes
+// (NNN.off) and the size of InverseCSG's solution for each
+// (inversecsg-results.csv). Every mesh is sampled into an oriented scan,
+// optionally noised, and reconstructed; the row reports the status, the wall
+// time of reconstruct(), the tree's size next to InverseCSG's, and the
+// volumetric IoU between the tree and the mesh's solid.
+//
+// Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
+//        [--models 011,039,...] [--samples S] [--time-limit T]
+//   --points      points sampled from each mesh, by area (default 50000)
+//   --noise       Gaussian position noise, sigma = F x D (D: the scan's
+//                 diagonal; default 0); normals are kept
+//   --res         ReconstructOptions::resolution (default 64)
+//   --models      comma-separated model names (default: all of the CSV)
+//   --samples     random points of the IoU estimate (default 200000)
+//   --time-limit  ReconstructOptions::timeLimit in seconds (default 0: none);
+//                 a model whose process runs past 3 T + 60 s is killed
+//
+// Each model runs in a child process of its own, so a crash or a runaway
+// model becomes a row with its reason and the run goes on. The children's
+// stderr (solver warnings) is discarded.
+
+#include "io/mesh_solid.h"
+#include "io/scan_reader.h"
+#include "io/triangle_mesh.h"
+#include "pipeline/reconstruct.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace csgvox;
+
+struct Options {
+  std::filesystem::path dir;
+  std::size_t points = 50000;
+  double noise = 0.0;
+  int resolution = 64;
+  int iouSamples = 200000;
+  double timeLimit = 0.0;
+  std::vector<std::string> models;
+};
+
+// One line of inversecsg-results.csv.
+struct Reference {
+  std::size_t vertices = 0;
+  std::size_t faces = 0;
+  std::size_t primitives = 0;
+  std::size_t operations = 0;
+};
+
+// What a child process reports about one model.
+struct Result {
+  std::string status = "crashed";  // Ok, NoSurfaces, ..., or error / crashed / killed
+  double seconds = -1.0;           // wall time of reconstruct(), -1: not run
+  long primitives = -1;
+  long operations = -1;
+  double iou = -1.0;               // -1: not measured
+  std::string note;                // the message, or why the IoU is missing
+};
+
+double loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double load = -1.0;
+  in >> load;
+  return load;
+}
+
+const char* statusName(Reconstruction::Status s) {
+  switch (s) {
+    case Reconstruction::Status::Ok: return "Ok";
+    case Reconstruction::Status::NoSurfaces: return "NoSurfaces";
+    case Reconstruction::Status::NoCombination: return "NoCombination";
+    case Reconstruction::Status::TimedOut: return "TimedOut";
+    case Reconstruction::Status::TooLarge: return "TooLarge";
+  }
+  return "?";
+}
+
+std::map<std::string, Reference> readReferences(const std::filesystem::path& csv) {
+  std::ifstream in(csv);
+  if (!in) throw std::runtime_error(csv.string() + ": cannot open");
+  std::map<std::string, Reference> refs;
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    std::string model;
+    Reference r;
+    if (fields >> model >> r.vertices >> r.faces >> r.primitives >> r.operations) refs[model] = r;
+  }
+  return refs;
+}
+
+// Volumetric IoU of two solids on uniform random points of `box`.
+template <class InA, class InB>
+double sampledIou(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::size_t both = 0, either = 0;
+  for (int i = 0; i < samples; ++i) {
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) p[k] = box.min[k] + unit(rng) * (box.max[k] - box.min[k]);
+    const bool a = inA(p), b = inB(p);
+    both += a && b;
+    either += a || b;
+  }
+  return either ? double(both) / double(either) : 1.0;
+}
+
+// Runs one model; never throws.
+Result runModel(const Options& opt, const std::string& model) {
+  Result res;
+  const std::filesystem::path path = opt.dir / (model + ".off");
+  try {
+    ReadOptions rd;
+    rd.meshSamples = opt.points;
+    rd.seed = 1;
+    PointCloud scan = readScan(path, rd).cloud;
+    if (opt.noise > 0.0) {
+      const double sigma = opt.noise * scan.diagonal();
+      std::mt19937_64 rng(7);
+      std::normal_distribution<double> gauss(0.0, sigma);
+      for (Vec3& p : scan.points) p += Vec3(gauss(rng), gauss(rng), gauss(rng));
+    }
+
+    ReconstructOptions ro;
+    ro.resolution = opt.resolution;
+    ro.seed = 1;
+    ro.timeLimit = opt.timeLimit;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Reconstruction rec = reconstruct(scan, ro);
+    res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    res.status = statusName(rec.status);
+    res.note = rec.message;
+    if (rec.timeLimitHit) res.note += " (time limit hit)";
+    if (!rec.ok()) return res;
+    res.primitives = long(rec.tree.primitiveCount());
+    res.operations = long(rec.tree.operationCount());
+
+    const TriangleMesh mesh = readMesh(path);
+    const Aabb meshBox = mesh.bounds();
+    std::optional<MeshSolid> solid;
+    try {
+      solid.emplace(mesh, meshBox.diagonal() / 400.0);
+    } catch (const std::invalid_argument& e) {
+      res.note = "open mesh, no IoU (" + std::string(e.what()) + "); " + res.note;
+      return res;
+    }
+    Aabb box = meshBox;
+    const Aabb treeBox = rec.tree.bounds();
+    if (treeBox.isBounded()) {
+      box.extend(treeBox);
+    } else {
+      // Unbounded tree: its volume is infinite anyway; measure near the part.
+      const double margin = 0.1 * meshBox.diagonal();
+      box.min.array() -= margin;
+      box.max.array() += margin;
+      res.note = "unbounded tree; " + res.note;
+    }
+    res.iou = sampledIou(
+        box, [&](const Vec3& p) { return rec.tree.contains(p); },
+        [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1);
+  } catch (const std::exception& e) {
+    if (res.seconds < 0.0) res.status = "error";
+    res.note = std::string("exception: ") + e.what();
+  }
+  return res;
+}
+
+// One result as a single line for the pipe (the note is last, may hold tabs).
+std::string encode(const Result& r) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s\t%.6f\t%ld\t%ld\t%.6f\t", r.status.c_str(), r.seconds,
+                r.primitives, r.operations, r.iou);
+  std::string note = r.note;
+  std::replace(note.begin(), note.end(), '\n', ' ');
+  return buf + note;
+}
+
+bool decode(const std::string& line, Result& r) {
+  std::istringstream in(line);
+  std::string seconds, prims, ops, iou;
+  if (!std::getline(in, r.status, '\t') || !std::getline(in, seconds, '\t') ||
+      !std::getline(in, prims, '\t') || !std::getline(in, ops, '\t') ||
+      !std::getline(in, iou, '\t')) {
+    return false;
+  }
+  std::getline(in, r.note);
+  r.seconds = std::atof(seconds.c_str());
+  r.primitives = std::atol(prims.c_str());
+  r.operations = std::atol(ops.c_str());
+  r.iou = std::atof(iou.c_str());
+  return true;
+}
+
+// Runs one model in a child process; the parent never builds anything large
+// nor starts TBB's threads, so forking is safe.
+Result runIsolated(const Options& opt, const std::string& model) {
+  int fds[2];
+  Result r;
+  if (pipe(fds) != 0) {
+    r.status = "error";
+    r.note = "pipe failed";
+    return r;
+  }
+  std::fflush(stdout);
+  const pid_t child = fork();
+  if (child < 0) {
+    close(fds[0]);
+    close(fds[1]);
+    r.status = "error";
+    r.note = "fork failed";
+    return r;
+  }
+  if (child == 0) {
+    close(fds[0]);
+    // The solver's own warnings (e.g. a failed Cholesky step during
+    // refinement) would bury the table; the row carries what matters.
+    const int devNull = open("/dev/null", O_WRONLY);
+    if (devNull >= 0) {
+      dup2(devNull, STDERR_FILENO);
+      close(devNull);
+    }
+    const std::string line = encode(runModel(opt, model)) + "\n";
+    std::size_t done = 0;
+    while (done < line.size()) {
+      const ssize_t n = write(fds[1], line.data() + done, line.size() - done);
+      if (n <= 0) break;
+      done += std::size_t(n);
+    }
+    close(fds[1]);
+    _exit(0);
+  }
+  close(fds[1]);
+  const double killAfter = opt.timeLimit > 0.0 ? 3.0 * opt.timeLimit + 60.0 : 0.0;
+  const auto start = std::chrono::steady_clock::now();
+  std::string text;
+  bool killed = false;
+  for (;;) {
+    int waitMs = -1;
+    if (killAfter > 0.0) {
+      const double left =
+          killAfter - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (left <= 0.0) {
+        kill(child, SIGKILL);
+        killed = true;
+        break;
+      }
+      waitMs = int(std::ceil(left * 1000.0));
+    }
+    pollfd pfd{fds[0], POLLIN, 0};
+    const int ready = poll(&pfd, 1, waitMs);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) continue;  // timeout: checked at the top
+    char buf[4096];
+    const ssize_t n = read(fds[0], buf, sizeof buf);
+    if (n <= 0) break;
+    text.append(buf, std::size_t(n));
+  }
+  close(fds[0]);
+  int status = 0;
+  waitpid(child, &status, 0);
+  if (killed) {
+    r.status = "killed";
+    r.note = "still running after " + std::to_string(int(killAfter)) + " s";
+    return r;
+  }
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  if (decode(text, r)) return r;
+  r = Result{};
+  r.status = "crashed";
+  r.note = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                               : "exit code " + std::to_string(WEXITSTATUS(status));
+  return r;
+}
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::istringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return -1.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+int usage(const char* argv0) {
+  std::fprintf(stderr,
+               "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
+               "[--samples S] [--time-limit T]\n",
+               argv0);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool hasValue = i + 1 < argc;
+    if (arg == "--points" && hasValue) {
+      opt.points = std::size_t(std::atoll(argv[++i]));
+    } else if (arg == "--noise" && hasValue) {
+      opt.noise = std::atof(argv[++i]);
+    } else if (arg == "--res" && hasValue) {
+      opt.resolution = std::atoi(argv[++i]);
+    } else if (arg == "--models" && hasValue) {
+      opt.models = splitList(argv[++i]);
+    } else if (arg == "--samples" && hasValue) {
+      opt.iouSamples = std::atoi(argv[++i]);
+    } else if (arg == "--time-limit" && hasValue) {
+      opt.timeLimit = std::atof(argv[++i]);
+    } else if (!arg.empty() && arg[0] != '-' && opt.dir.empty()) {
+      opt.dir = arg;
+    } else {
+      return usage(argv[0]);
+    }
+  }
+  if (opt.dir.empty() || opt.points == 0 || opt.resolution <= 0 || opt.iouSamples <= 0 ||
+      opt.noise < 0.0 || opt.timeLimit < 0.0) {
+    return usage(argv[0]);
+  }
+
+  std::map<std::string, Reference> refs;
+  try {
+    refs = readReferences(opt.dir / "inversecsg-results.csv");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+  if (opt.models.empty()) {
+    for (const auto& [name, ref] : refs) opt.models.push_back(name);
+  }
+
+  char limitText[32] = "none";
+  if (opt.timeLimit > 0.0) std::snprintf(limitText, sizeof limitText, "%g s", opt.timeLimit);
+  std::printf("InverseCSG benchmark %s: %zu models, %zu points per mesh, noise %.4f D, res %d, "
+              "time limit %s\n",
+              opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
+              limitText);
+  std::printf("time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
+              "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
+              opt.iouSamples);
+  std::printf("load average at start: %.2f\n", loadAverage());
+  std::printf("%-6s %6s %-13s %8s %5s %5s %5s %5s %7s  %s\n", "model", "faces", "status", "time_s",
+              "prims", "ics_p", "ops", "ics_o", "IoU", "note");
+
+  std::size_t ok = 0, withIou = 0, iou95 = 0, iou99 = 0, notLarger = 0;
+  long ourPrims = 0, theirPrims = 0;
+  std::vector<double> times, ious;
+  for (const std::string& model : opt.models) {
+    const auto ref = refs.find(model);
+    const Reference r = ref != refs.end() ? ref->second : Reference{};
+    const Result res = runIsolated(opt, model);
+    const bool isOk = res.status == "Ok";
+    std::printf("%-6s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), r.faces,
+                res.status.c_str(), res.seconds, res.primitives, r.primitives, res.operations,
+                r.operations);
+    if (res.iou >= 0.0) {
+      std::printf("%7.4f", res.iou);
+    } else {
+      std::printf("%7s", "-");
+    }
+    std::printf("  %s\n", res.note.c_str());
+    std::fflush(stdout);
+
+    if (res.seconds >= 0.0) times.push_back(res.seconds);
+    if (!isOk) continue;
+    ++ok;
+    ourPrims += res.primitives;
+    theirPrims += long(r.primitives);
+    if (ref != refs.end() && res.primitives <= long(r.primitives)) ++notLarger;
+    if (res.iou >= 0.0) {
+      ++withIou;
+      ious.push_back(res.iou);
+      iou95 += res.iou >= 0.95;
+      iou99 += res.iou >= 0.99;
+    }
+  }
+
+  const std::size_t n = opt.models.size();
+  std::printf("\nsummary (%zu models, %zu points, noise %.4f D, res %d)\n", n, opt.points,
+              opt.noise, opt.resolution);
+  std::printf("  reconstructed (Ok):            %zu / %zu\n", ok, n);
+  std::printf("  IoU measured:                  %zu (closed meshes among the reconstructed)\n",
+              withIou);
+  std::printf("  IoU >= 0.95:                   %zu / %zu\n", iou95, withIou);
+  std::printf("  IoU >= 0.99:                   %zu / %zu\n", iou99, withIou);
+  std::printf("  median IoU:                    %.4f\n", median(ious));
+  std::printf("  primitives <= InverseCSG's:    %zu / %zu (total %ld vs %ld over those models)\n",
+              notLarger, ok, ourPrims, theirPrims);
+  std::printf("  reconstruct time, median/max:  %.2f / %.2f s (%zu runs)\n", median(times),
+              times.empty() ? -1.0 : *std::max_element(times.begin(), times.end()), times.size());
+  std::printf("  load average at end:           %.2f\n", loadAverage());
+  return 0;
+}
