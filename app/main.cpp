@@ -3,6 +3,7 @@
 #include "app/commands.h"
 #include "io/errors.h"
 
+#include <glog/logging.h>
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -74,6 +75,11 @@ int main(int argc, char** argv) {
     const int code = cli.exit(e);
     return code == 0 ? 0 : 2;
   }
+
+  // Ceres logs a warning through glog for every step it cannot take (an
+  // ill-conditioned fit it then recovers from): noise between our progress
+  // lines, not news for the user. Errors still get through.
+  FLAGS_minloglevel = google::GLOG_ERROR;
 
   std::unique_ptr<tbb::global_control> threads;
   if (common.threads > 0) {
