@@ -10,6 +10,8 @@
 #include "primitives/surface_sampler.h"
 #include "voxel/voxel_grid.h"
 
+#include "bench_common.h"
+
 #include <sys/resource.h>
 
 #include <chrono>
@@ -19,15 +21,8 @@
 
 namespace {
 
-double seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-double peakMiB() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
-}
+using csgvox::bench::peakMiB;
+using csgvox::bench::seconds;
 
 }  // namespace
 

@@ -16,6 +16,8 @@
 #include "primitives/fit_metrics.h"
 #include "primitives/surface_sampler.h"
 
+#include "bench_common.h"
+
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -30,15 +32,8 @@ namespace {
 
 using namespace csgvox;
 
-double seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-double peakMiB() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;  // Linux reports KiB
-}
+using csgvox::bench::peakMiB;
+using csgvox::bench::seconds;
 
 // User + system CPU seconds of the whole process so far, all threads.
 double cpuSeconds() {

@@ -128,50 +128,72 @@ double exitWithin(const CsgTree& solid, const Vec3& from, const Vec3& dir, doubl
   return -1.0;
 }
 
-// A subtracted box, cylinder or cone whose end face stops within `snap` of where
-// the cut solid ends (along the face's normal) leaves a skin thinner than
-// voxels can see: a hole that should go through a shaft stops short of its
-// curved surface, and OpenSCAD then renders a closed cavity. The face is
-// moved one `snap` past the farthest exit measured at its centre and rim.
+// The centre of a disc (radius vectors u and v) and eight points at 0.95 of
+// its radius.
+std::vector<Vec3> discSamples(const Vec3& centre, const Vec3& u, const Vec3& v) {
+  std::vector<Vec3> out{centre};
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * std::numbers::pi / 4.0;
+    out.push_back(centre + 0.95 * (std::cos(a) * u + std::sin(a) * v));
+  }
+  return out;
+}
+
+// A 3 x 3 grid over a rectangle (half extents u and v), reaching 0.95 of them.
+std::vector<Vec3> rectangleSamples(const Vec3& centre, const Vec3& u, const Vec3& v) {
+  std::vector<Vec3> out;
+  for (int k = 0; k < 9; ++k) {
+    out.push_back(centre + 0.95 * ((k % 3) - 1) * u + 0.95 * ((k / 3) - 1) * v);
+  }
+  return out;
+}
+
+// A subtracted box, cylinder or cone whose end face stops within `snap` of
+// where the cut solid ends (along the face's normal) leaves a skin thinner
+// than voxels can see: a hole that should go through a shaft stops short of
+// its curved surface, and OpenSCAD then renders a closed cavity. Returns how
+// far to move the face (centre `face`, outward `dir`, half extents u and v
+// across it, `samples` on it): one `snap` past the farthest exit over the
+// samples. -1 when the solid does not end within `snap` at every sample, or
+// when the skin's outer face holds scan points (a real thin wall).
+double pushThrough(const CsgTree& solid, const Vec3& face, const Vec3& dir, const Vec3& u,
+                   const Vec3& v, const std::vector<Vec3>& samples, double snap,
+                   const ScannedAt& scannedAt) {
+  double reach = -1.0;
+  for (const Vec3& p : samples) {
+    const double e = exitWithin(solid, p, dir, snap);
+    if (e < 0.0) return -1.0;
+    reach = std::max(reach, e);
+  }
+  const std::vector<Vec3> probes = innerProbes(face, u, v);
+  std::vector<Vec3> outer;
+  for (const Vec3& p : probes) {
+    const double e = exitWithin(solid, p, dir, snap);
+    if (e >= 0.0) outer.push_back(p + e * dir);
+  }
+  if (2 * outer.size() > probes.size() && scanned(scannedAt, outer)) return -1.0;
+  return reach + snap;
+}
+
+// The tool with every face that stops in a skin of `solid` pushed through it
+// (see pushThrough).
 CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap,
                     const ScannedAt& scannedAt) {
-  // Where the solid ends past each inner probe of a face, if it does
-  // within `snap`: the skin's outer face, checked for scan points.
-  const auto skinScanned = [&](const std::vector<Vec3>& probes, const Vec3& dir) {
-    std::vector<Vec3> outer;
-    for (const Vec3& p : probes) {
-      const double e = exitWithin(solid, p, dir, snap);
-      if (e >= 0.0) outer.push_back(p + e * dir);
-    }
-    return 2 * outer.size() > probes.size() && scanned(scannedAt, outer);
-  };
   if (snap <= 0.0 || tool.root()->kind != NodeKind::Primitive) return tool;
   const Primitive& prim = tool.root()->primitive;
+  bool changed = false;
   if (const Cylinder* c = prim.as<Cylinder>()) {
     const Mat3 frame = frameFromAxis(c->axis);
+    const Vec3 u = c->radius * frame.col(0), v = c->radius * frame.col(1);
     Cylinder grown = *c;
-    bool changed = false;
     for (const double sign : {-1.0, 1.0}) {
       const Vec3 dir = sign * c->axis;
       const Vec3 face = c->center + 0.5 * c->height * dir;
-      double reach = -1.0;
-      bool all = true;
-      for (int k = -1; k < 8 && all; ++k) {
-        const double a = k * std::numbers::pi / 4.0;
-        const Vec3 p = k < 0 ? face
-                             : face + 0.95 * c->radius *
-                                          (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
-        const double e = exitWithin(solid, p, dir, snap);
-        all = e >= 0.0;
-        reach = std::max(reach, e);
-      }
-      if (!all || skinScanned(innerProbes(face, c->radius * frame.col(0),
-                                          c->radius * frame.col(1)),
-                              dir)) {
-        continue;
-      }
-      grown.center += 0.5 * (reach + snap) * dir;
-      grown.height += reach + snap;
+      const double extra =
+          pushThrough(solid, face, dir, u, v, discSamples(face, u, v), snap, scannedAt);
+      if (extra < 0.0) continue;
+      grown.center += 0.5 * extra * dir;
+      grown.height += extra;
       changed = true;
     }
     return changed ? CsgTree::leaf(grown, tool.root()->name) : tool;
@@ -180,28 +202,15 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap,
     const Mat3 frame = frameFromAxis(c->axis);
     const double slope = (c->radiusTop - c->radiusBottom) / c->height;
     Cone grown = *c;
-    bool changed = false;
     for (const double sign : {-1.0, 1.0}) {
       const Vec3 dir = sign * c->axis;
       const Vec3 face = c->center + 0.5 * c->height * dir;
       const double radius = sign > 0.0 ? c->radiusTop : c->radiusBottom;
-      double reach = -1.0;
-      bool all = true;
-      for (int k = -1; k < 8 && all; ++k) {
-        const double a = k * std::numbers::pi / 4.0;
-        const Vec3 p = k < 0 ? face
-                             : face + 0.95 * radius *
-                                          (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
-        const double e = exitWithin(solid, p, dir, snap);
-        all = e >= 0.0;
-        reach = std::max(reach, e);
-      }
-      if (!all || skinScanned(innerProbes(face, radius * frame.col(0), radius * frame.col(1)),
-                              dir)) {
-        continue;
-      }
+      const Vec3 u = radius * frame.col(0), v = radius * frame.col(1);
+      const double extra =
+          pushThrough(solid, face, dir, u, v, discSamples(face, u, v), snap, scannedAt);
+      if (extra < 0.0) continue;
       // The frustum runs on along its own slope.
-      const double extra = reach + snap;
       if (sign > 0.0) {
         grown.radiusTop += slope * extra;
       } else {
@@ -215,29 +224,17 @@ CsgTree throughSkin(const CsgTree& tool, const CsgTree& solid, double snap,
   }
   if (const Box* b = prim.as<Box>()) {
     Box grown = *b;
-    bool changed = false;
     for (int axis = 0; axis < 3; ++axis) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const Vec3 u = b->halfSize[(axis + 1) % 3] * b->axes.col((axis + 1) % 3);
+      const Vec3 v = b->halfSize[(axis + 2) % 3] * b->axes.col((axis + 2) % 3);
       for (const double sign : {-1.0, 1.0}) {
         const Vec3 dir = sign * b->axes.col(axis);
         const Vec3 face = b->center + b->halfSize[axis] * dir;
-        double reach = -1.0;
-        bool all = true;
-        for (int k = 0; k < 9 && all; ++k) {
-          const double su = 0.95 * ((k % 3) - 1), sv = 0.95 * ((k / 3) - 1);
-          const Vec3 p = face + su * b->halfSize[u] * b->axes.col(u) +
-                         sv * b->halfSize[v] * b->axes.col(v);
-          const double e = exitWithin(solid, p, dir, snap);
-          all = e >= 0.0;
-          reach = std::max(reach, e);
-        }
-        if (!all || skinScanned(innerProbes(face, b->halfSize[u] * b->axes.col(u),
-                                            b->halfSize[v] * b->axes.col(v)),
-                                dir)) {
-          continue;
-        }
-        grown.center += 0.5 * (reach + snap) * dir;
-        grown.halfSize[axis] += 0.5 * (reach + snap);
+        const double extra =
+            pushThrough(solid, face, dir, u, v, rectangleSamples(face, u, v), snap, scannedAt);
+        if (extra < 0.0) continue;
+        grown.center += 0.5 * extra * dir;
+        grown.halfSize[axis] += 0.5 * extra;
         changed = true;
       }
     }
@@ -351,63 +348,52 @@ void refineUnion(std::vector<Member>& members, const std::vector<Member>& extra,
       improved = tryMove(trial);
     }
     if (improved) continue;
-    // The best new action over all members and candidates.
+    // The best new or replaced action over all members and candidates.
     std::size_t prims = 0;
     for (const Member& m : members) prims += memberPrimitives(m);
     double bestEnergy = energy - 1e-9;
     std::size_t bestMember = 0;
+    std::size_t bestSlot = std::size_t(-1);  // -1: a new action, else the action replaced
     SubtreeAction bestAction;
     bool found = false;
     for (std::size_t i = 0; i < members.size(); ++i) {
+      const Member& m = members[i];
       VoxelSet rest(inside.size());
       for (std::size_t j = 0; j < members.size(); ++j) {
         if (j != i) rest |= members[j].voxels;
       }
-      const double base = cost * double(prims + 1);
+      // Tries `base` (the member's voxels without the changed slot) cut by
+      // candidate k, as the action in `slot`, with `count` primitives.
+      const auto tryAction = [&](const VoxelSet& base, std::size_t slot, std::uint32_t k,
+                                 bool subtract, std::size_t count) {
+        VoxelSet v = subtract ? base - d[k].voxels : base & d[k].voxels;
+        v |= rest;
+        const double e = cost * double(count) + double(v.count() + insideCount) -
+                         2.0 * double(VoxelSet::countAnd(v, inside));
+        if (e < bestEnergy) {
+          bestEnergy = e;
+          bestMember = i;
+          bestSlot = slot;
+          bestAction = SubtreeAction{k, subtract};
+          found = true;
+        }
+      };
       for (std::uint32_t k = 0; k < d.size(); ++k) {
-        if (k == members[i].root || !VoxelSet::intersects(d[k].voxels, members[i].voxels)) continue;
+        if (k == m.root || !VoxelSet::intersects(d[k].voxels, m.voxels)) continue;
         for (const bool subtract : {true, false}) {
-          VoxelSet v = subtract ? members[i].voxels - d[k].voxels : members[i].voxels & d[k].voxels;
-          v |= rest;
-          const double e = base + double(v.count() + insideCount) -
-                           2.0 * double(VoxelSet::countAnd(v, inside));
-          if (e < bestEnergy) {
-            bestEnergy = e;
-            bestMember = i;
-            bestAction = SubtreeAction{k, subtract};
-            found = true;
-          }
+          tryAction(m.voxels, std::size_t(-1), k, subtract, prims + 1);
         }
       }
-    }
-    // Or the best replacement of one action's candidate by another, with
-    // the same operation (a better fit of the same surface).
-    std::size_t bestSlot = std::size_t(-1);
-    for (std::size_t i = 0; i < members.size(); ++i) {
-      VoxelSet rest(inside.size());
-      for (std::size_t j = 0; j < members.size(); ++j) {
-        if (j != i) rest |= members[j].voxels;
-      }
-      const double base = cost * double(prims);
-      for (std::size_t a = 0; a < members[i].actions.size(); ++a) {
-        const SubtreeAction old = members[i].actions[a];
-        const VoxelSet without = memberVoxels(members[i], d, a);
+      // Or the best replacement of one action's candidate by another, with
+      // the same operation (a better fit of the same surface).
+      for (std::size_t a = 0; a < m.actions.size(); ++a) {
+        const SubtreeAction old = m.actions[a];
+        const VoxelSet without = memberVoxels(m, d, a);
         for (std::uint32_t k = 0; k < d.size(); ++k) {
-          if (k == old.primitive || k == members[i].root ||
-              !VoxelSet::intersects(d[k].voxels, without)) {
+          if (k == old.primitive || k == m.root || !VoxelSet::intersects(d[k].voxels, without)) {
             continue;
           }
-          VoxelSet v = old.subtract ? without - d[k].voxels : without & d[k].voxels;
-          v |= rest;
-          const double e = base + double(v.count() + insideCount) -
-                           2.0 * double(VoxelSet::countAnd(v, inside));
-          if (e < bestEnergy) {
-            bestEnergy = e;
-            bestMember = i;
-            bestSlot = a;
-            bestAction = SubtreeAction{k, old.subtract};
-            found = true;
-          }
+          tryAction(without, a, k, old.subtract, prims);
         }
       }
     }
