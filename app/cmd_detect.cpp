@@ -1,5 +1,6 @@
 // csgvox detect SCAN -o OUTDIR [--epsilon E] [--min-points M] ...
 
+#include "primitives/bounding_box.h"
 #include "app/commands.h"
 #include "app/console.h"
 #include "app/report.h"

@@ -5,7 +5,7 @@
 #include "app/report.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
-#include "primitives/fit_metrics.h"
+#include "mesh/fit_metrics.h"
 
 #include <cstdio>
 #include <iostream>

@@ -6,14 +6,14 @@
 #include "app/console.h"
 #include "app/report.h"
 #include "io/errors.h"
-#include "io/mesh_export.h"
+#include "mesh/mesh_export.h"
 #include "io/scad_export.h"
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
 #include "pipeline/reconstruct.h"
-#include "io/triangle_mesh.h"
-#include "primitives/fit_metrics.h"
+#include "io/mesh_files.h"
+#include "mesh/fit_metrics.h"
 
 #include <cstdio>
 #include <filesystem>

@@ -4,11 +4,11 @@
 #include "app/console.h"
 #include "io/errors.h"
 #include "io/file_util.h"
-#include "io/mesh_export.h"
+#include "mesh/mesh_export.h"
 #include "io/scad_export.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
-#include "io/triangle_mesh.h"
+#include "io/mesh_files.h"
 
 #include <cstdio>
 

@@ -6,7 +6,7 @@
 #include "io/file_util.h"
 #include "io/point_writer.h"
 #include "io/tree_json.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/surface_sampler.h"
 
 #include <cstdio>
 

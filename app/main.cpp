@@ -2,8 +2,8 @@
 
 #include "app/commands.h"
 #include "io/errors.h"
+#include "primitives/solver_log.h"
 
-#include <glog/logging.h>
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   // Ceres logs a warning through glog for every step it cannot take (an
   // ill-conditioned fit it then recovers from): noise between our progress
   // lines, not news for the user. Errors still get through.
-  FLAGS_minloglevel = google::GLOG_ERROR;
+  setSolverLog(common.quiet ? SolverLog::None : SolverLog::Errors);
 
   std::unique_ptr<tbb::global_control> threads;
   if (common.threads > 0) {

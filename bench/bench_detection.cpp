@@ -2,12 +2,13 @@
 // bundled part at several sizes: time per stage and peak memory.
 // Run: build/bench/bench_detection [data/<part>/tree.json] [noise]
 
+#include "primitives/bounding_box.h"
 #include "io/tree_json.h"
 #include "primitives/hypotheses.h"
 #include "primitives/regularization.h"
 #include "primitives/surface_detection.h"
 #include "primitives/surface_refinement.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/surface_sampler.h"
 #include "voxel/voxel_grid.h"
 
 #include "bench_common.h"

@@ -20,9 +20,9 @@
 // model becomes a row with its reason and the run goes on. The children's
 // stderr (solver warnings) is discarded.
 
-#include "io/mesh_solid.h"
+#include "mesh/mesh_solid.h"
 #include "io/scan_reader.h"
-#include "io/triangle_mesh.h"
+#include "io/mesh_files.h"
 #include "pipeline/reconstruct.h"
 
 #include <fcntl.h>

@@ -10,11 +10,11 @@
 // are therefore its own: peak RSS of sampling the scan plus the pipeline
 // (pipe_MiB), and of all of it plus meshing and the fit metrics (peak_MiB).
 
-#include "io/mesh_export.h"
+#include "mesh/mesh_export.h"
 #include "io/tree_json.h"
 #include "pipeline/reconstruct.h"
-#include "primitives/fit_metrics.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/fit_metrics.h"
+#include "mesh/surface_sampler.h"
 
 #include "bench_common.h"
 

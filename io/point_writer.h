@@ -1,7 +1,7 @@
 #pragma once
 /// Writing point clouds as PLY (optionally with per-point colours) and XYZ.
 
-#include "primitives/point_cloud.h"
+#include "core/point_cloud.h"
 
 #include <array>
 #include <cstdint>

@@ -4,7 +4,7 @@
 /// expression over those modules. Half-spaces and complements become large
 /// boxes clipped to the part.
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 
 #include <filesystem>
 #include <iosfwd>

@@ -2,7 +2,7 @@
 
 #include "io/errors.h"
 #include "io/file_util.h"
-#include "io/normal_estimation.h"
+#include "primitives/normal_estimation.h"
 
 #include <CGAL/IO/OBJ.h>
 #include <CGAL/IO/PLY.h>

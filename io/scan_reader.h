@@ -3,7 +3,7 @@
 /// OFF, OBJ, STL) become points with unit outward normals. Normals missing
 /// from a point cloud are estimated; meshes are sampled by area.
 
-#include "primitives/point_cloud.h"
+#include "core/point_cloud.h"
 
 #include <cstddef>
 #include <cstdint>

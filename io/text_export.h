@@ -4,7 +4,7 @@
 ///   difference(union(base, boss), hole1)
 ///   base = box(center=[0, 0, 5], half_size=[40, 30, 5], axes=identity)
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 
 #include <filesystem>
 #include <iosfwd>

@@ -1,7 +1,7 @@
 #pragma once
 /// tree.json: the csgvox tree format (documented in README.md, "File formats").
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 
 #include <filesystem>
 #include <iosfwd>

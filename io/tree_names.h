@@ -2,7 +2,7 @@
 /// Stable, unique, identifier-safe names for the leaves of a tree, shared by
 /// the text and OpenSCAD exports.
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 
 #include <string>
 #include <unordered_map>

@@ -4,8 +4,8 @@
 
 #include "optimize/subtree_selection.h"
 #include "optimize/union_selection.h"
-#include "primitives/csg_tree.h"
-#include "primitives/progress.h"
+#include "core/csg_tree.h"
+#include "core/progress.h"
 #include "voxel/description_sets.h"
 
 #include <functional>

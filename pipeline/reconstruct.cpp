@@ -1,6 +1,7 @@
+#include "primitives/bounding_box.h"
 #include "pipeline/reconstruct.h"
 
-#include "primitives/nearest_neighbors.h"
+#include "core/nearest_neighbors.h"
 #include "primitives/regularization.h"
 #include "primitives/surface_refinement.h"
 

@@ -8,8 +8,8 @@
 
 #include "optimize/csg_construction.h"
 #include "primitives/hypotheses.h"
-#include "primitives/point_cloud.h"
-#include "primitives/progress.h"
+#include "core/point_cloud.h"
+#include "core/progress.h"
 #include "primitives/surface_detection.h"
 #include "voxel/description_sets.h"
 #include "voxel/labeling.h"

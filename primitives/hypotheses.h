@@ -32,9 +32,9 @@
 /// the scan's minimal oriented bounding box (not the axis-aligned one), so a
 /// rotated scan gives the same candidates, rotated.
 
-#include "primitives/csg_tree.h"
-#include "primitives/point_cloud.h"
-#include "primitives/surface.h"
+#include "core/csg_tree.h"
+#include "core/point_cloud.h"
+#include "core/surface.h"
 
 #include <array>
 #include <cstddef>

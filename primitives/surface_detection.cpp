@@ -1,6 +1,6 @@
 #include "primitives/surface_detection.h"
 
-#include "primitives/nearest_neighbors.h"
+#include "core/nearest_neighbors.h"
 #include "primitives/surface_refinement.h"
 
 #include <CGAL/Random.h>

@@ -4,9 +4,9 @@
 /// parameters relative to the scan's bounding-box diagonal D and to its
 /// estimated noise, so clean and noisy scans need no tuning.
 
-#include "primitives/point_cloud.h"
-#include "primitives/progress.h"
-#include "primitives/surface.h"
+#include "core/point_cloud.h"
+#include "core/progress.h"
+#include "core/surface.h"
 
 #include <cstddef>
 #include <cstdint>

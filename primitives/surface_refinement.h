@@ -4,8 +4,8 @@
 /// the surface that explains them best, and a final re-fit, so the surface
 /// parameters are as exact as the scan allows.
 
-#include "primitives/point_cloud.h"
-#include "primitives/surface.h"
+#include "core/point_cloud.h"
+#include "core/surface.h"
 #include "primitives/surface_detection.h"
 
 #include <cstddef>

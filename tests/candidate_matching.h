@@ -37,8 +37,8 @@
 /// every face the fillet torus removes) are reported, not matched.
 
 #include "primitives/hypotheses.h"
-#include "primitives/surface.h"
-#include "primitives/surface_sampler.h"
+#include "core/surface.h"
+#include "mesh/surface_sampler.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,8 +2,8 @@
 // naming the file, no partial outputs, and the sample/eval/render round trip
 // on every bundled part.
 
-#include "io/mesh_solid.h"
-#include "io/triangle_mesh.h"
+#include "mesh/mesh_solid.h"
+#include "io/mesh_files.h"
 #include "part_list.h"
 #include "test_helpers.h"
 

@@ -13,7 +13,7 @@
 #include "pipeline/reconstruct.h"
 #include "optimize/csg_construction.h"
 #include "part_list.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/surface_sampler.h"
 #include "voxel/description_sets.h"
 #include "voxel/labeling.h"
 

@@ -2,7 +2,7 @@
 // classification, bounds, structural equality, validation and the sharing of
 // immutable subtrees.
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 
 #include "test_helpers.h"
 

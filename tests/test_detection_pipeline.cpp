@@ -3,6 +3,7 @@
 // each part must have a matching candidate (candidate_matching.h defines the
 // match: same type, axes within 2 degrees, visible geometry within 1 % of D).
 
+#include "primitives/bounding_box.h"
 #include "candidate_matching.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"

@@ -1,5 +1,5 @@
-#include "primitives/fit_metrics.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/fit_metrics.h"
+#include "mesh/surface_sampler.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Tests for primitives/geometry.h: axis-aligned boxes and frames from an axis.
 
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include "test_helpers.h"
 

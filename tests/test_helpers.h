@@ -4,9 +4,9 @@
 /// trees, an independent point-in-solid test, parametric surface samples and
 /// finite-difference gradients.
 
-#include "primitives/csg_tree.h"
-#include "primitives/geometry.h"
-#include "primitives/primitive.h"
+#include "core/csg_tree.h"
+#include "core/geometry.h"
+#include "core/primitive.h"
 
 #include <gtest/gtest.h>
 

@@ -3,10 +3,11 @@
 // bundled part, on its clean and noisy scans and on scans with holes, for both
 // labelling methods.
 
+#include "primitives/bounding_box.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "part_list.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/surface_sampler.h"
 #include "voxel/labeling.h"
 
 #include <gtest/gtest.h>

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "io/errors.h"
-#include "io/mesh_export.h"
-#include "io/mesh_solid.h"
-#include "io/triangle_mesh.h"
+#include "mesh/mesh_export.h"
+#include "mesh/mesh_solid.h"
+#include "io/mesh_files.h"
 #include "test_helpers.h"
 
 namespace csgvox {

@@ -2,7 +2,7 @@
 // distance (brute force against parametric surface samples), gradients,
 // classification, bounds, volume and area, validation and equality.
 
-#include "primitives/primitive.h"
+#include "core/primitive.h"
 
 #include "test_helpers.h"
 

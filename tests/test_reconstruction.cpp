@@ -8,7 +8,7 @@
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "pipeline/reconstruct.h"
-#include "primitives/fit_metrics.h"
+#include "mesh/fit_metrics.h"
 #include "test_helpers.h"
 #include "part_list.h"
 

@@ -1,11 +1,11 @@
 // The OpenSCAD export: its text, and (when openscad is installed) that
 // OpenSCAD renders it to the same solid as the tree and as csgvox's mesh.
 
-#include "io/mesh_export.h"
-#include "io/mesh_solid.h"
+#include "mesh/mesh_export.h"
+#include "mesh/mesh_solid.h"
 #include "io/scad_export.h"
 #include "io/tree_json.h"
-#include "io/triangle_mesh.h"
+#include "io/mesh_files.h"
 #include "part_list.h"
 #include "test_helpers.h"
 

@@ -1,5 +1,5 @@
 #include "io/errors.h"
-#include "io/normal_estimation.h"
+#include "primitives/normal_estimation.h"
 #include "io/scan_reader.h"
 
 #include <gtest/gtest.h>

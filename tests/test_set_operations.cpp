@@ -2,9 +2,9 @@
 // keep the same zero set, their values follow the closed forms and their
 // gradients match finite differences.
 
-#include "primitives/set_operations.h"
+#include "core/set_operations.h"
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 #include "test_helpers.h"
 
 #include <gtest/gtest.h>

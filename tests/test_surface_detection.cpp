@@ -8,7 +8,7 @@
 #include "primitives/regularization.h"
 #include "primitives/surface_detection.h"
 #include "primitives/surface_refinement.h"
-#include "primitives/surface_sampler.h"
+#include "mesh/surface_sampler.h"
 #include "test_helpers.h"
 
 #include <gtest/gtest.h>

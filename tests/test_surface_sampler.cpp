@@ -1,5 +1,5 @@
-#include "primitives/nearest_neighbors.h"
-#include "primitives/surface_sampler.h"
+#include "core/nearest_neighbors.h"
+#include "mesh/surface_sampler.h"
 
 #include <gtest/gtest.h>
 

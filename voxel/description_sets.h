@@ -3,7 +3,7 @@
 /// V = voxels whose centre lies in the solid, V+ = V ∩ inside,
 /// V− = V ∩ outside, and μ = whether the solid reaches the grid's border.
 
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 #include "voxel/labeling.h"
 
 #include <span>

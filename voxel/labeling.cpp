@@ -1,6 +1,6 @@
 #include "voxel/labeling.h"
 
-#include "primitives/nearest_neighbors.h"
+#include "core/nearest_neighbors.h"
 
 #include <tbb/parallel_for.h>
 

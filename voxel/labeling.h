@@ -1,7 +1,7 @@
 #pragma once
 /// Inside/outside labels of the voxels of a grid, from an oriented scan.
 
-#include "primitives/point_cloud.h"
+#include "core/point_cloud.h"
 #include "voxel/voxel_grid.h"
 #include "voxel/voxel_set.h"
 

@@ -2,29 +2,13 @@
 /// A regular voxel grid in an oriented frame (usually the scan's minimal
 /// oriented bounding box), with `resolution` voxels along its longest side.
 
-#include "primitives/geometry.h"
+#include "core/oriented_box.h"
 
 #include <array>
 #include <cstddef>
 #include <span>
 
 namespace csgvox {
-
-/// An oriented box: centre, unit axes (columns, right-handed) and half sizes.
-struct OrientedBox {
-  Vec3 center = Vec3::Zero();
-  Mat3 axes = Mat3::Identity();
-  Vec3 halfSize = Vec3::Zero();
-};
-
-/// Minimal-volume oriented bounding box of points (CGAL's optimal bounding
-/// box). Axes are ordered longest first and made right-handed.
-/// @throw std::invalid_argument for fewer than 4 points.
-OrientedBox minimalOrientedBox(std::span<const Vec3> points);
-
-/// The bounding box of points in a given orthonormal frame (columns), with
-/// the axes ordered longest first and made right-handed.
-OrientedBox boxAlong(std::span<const Vec3> points, const Mat3& frame);
 
 /// Options of VoxelGrid::around.
 struct GridOptions {

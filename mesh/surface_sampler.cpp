@@ -1,4 +1,4 @@
-#include "primitives/surface_sampler.h"
+#include "mesh/surface_sampler.h"
 
 #include <tbb/parallel_for.h>
 

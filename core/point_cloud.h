@@ -1,7 +1,7 @@
 #pragma once
 /// A scan: points with (optional) unit outward normals.
 
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include <cstddef>
 #include <vector>

@@ -1,4 +1,4 @@
-#include "primitives/set_operations.h"
+#include "core/set_operations.h"
 
 #include <cmath>
 

@@ -2,8 +2,8 @@
 /// How well a CSG tree fits a scan. Distances are in scan units; the
 /// `relative` figures divide them by the scan's bounding-box diagonal D.
 
-#include "primitives/csg_tree.h"
-#include "primitives/point_cloud.h"
+#include "core/csg_tree.h"
+#include "core/point_cloud.h"
 
 #include <cstdint>
 

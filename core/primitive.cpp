@@ -1,4 +1,4 @@
-#include "primitives/primitive.h"
+#include "core/primitive.h"
 
 #include <algorithm>
 #include <array>

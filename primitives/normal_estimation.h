@@ -1,7 +1,7 @@
 #pragma once
 /// Normal estimation for scans that come without normals.
 
-#include "primitives/point_cloud.h"
+#include "core/point_cloud.h"
 
 namespace csgvox {
 

@@ -1,4 +1,4 @@
-#include "io/normal_estimation.h"
+#include "primitives/normal_estimation.h"
 
 #include <CGAL/Eigen_svd.h>
 #include <CGAL/Orthogonal_k_neighbor_search.h>

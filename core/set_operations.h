@@ -4,7 +4,7 @@
 /// from the surface (min/max is exact where one operand dominates, R-functions
 /// are smooth, SARDF is a C1 blend of min/max with bounded error).
 
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include <string_view>
 

@@ -5,7 +5,7 @@
 /// The gradient of f therefore points inwards; the outward surface normal is
 /// -grad f.
 
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include <string>
 #include <string_view>

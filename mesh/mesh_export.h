@@ -3,8 +3,8 @@
 /// on a narrow band of voxels around its surface and the zero set is
 /// polygonised with OpenVDB.
 
-#include "io/triangle_mesh.h"
-#include "primitives/csg_tree.h"
+#include "core/triangle_mesh.h"
+#include "core/csg_tree.h"
 
 namespace csgvox {
 

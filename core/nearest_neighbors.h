@@ -1,7 +1,7 @@
 #pragma once
 /// Exact nearest-neighbour queries over a fixed set of 3D points (a k-d tree).
 
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include <cstdint>
 #include <memory>

@@ -1,4 +1,4 @@
-#include "io/mesh_solid.h"
+#include "mesh/mesh_solid.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>

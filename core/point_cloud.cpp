@@ -1,4 +1,4 @@
-#include "primitives/point_cloud.h"
+#include "core/point_cloud.h"
 
 namespace csgvox {
 

@@ -2,8 +2,8 @@
 /// Uniform sampling of the boundary of a CSG solid: synthetic scans with
 /// outward normals, optional noise and scanner-like holes.
 
-#include "primitives/csg_tree.h"
-#include "primitives/point_cloud.h"
+#include "core/csg_tree.h"
+#include "core/point_cloud.h"
 
 #include <cstdint>
 

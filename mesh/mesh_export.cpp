@@ -1,4 +1,4 @@
-#include "io/mesh_export.h"
+#include "mesh/mesh_export.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>

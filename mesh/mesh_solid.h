@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "io/triangle_mesh.h"
+#include "core/triangle_mesh.h"
 
 namespace csgvox {
 

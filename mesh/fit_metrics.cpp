@@ -1,7 +1,7 @@
-#include "primitives/fit_metrics.h"
+#include "mesh/fit_metrics.h"
 
-#include "primitives/nearest_neighbors.h"
-#include "primitives/surface_sampler.h"
+#include "core/nearest_neighbors.h"
+#include "mesh/surface_sampler.h"
 
 #include <tbb/parallel_for.h>
 

@@ -2,7 +2,7 @@
 /// Fitted surfaces: the unbounded surfaces detected in a scan (planes,
 /// cylinders, cones, spheres, tori), each with the scan points it explains.
 
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include <cstdint>
 #include <string_view>

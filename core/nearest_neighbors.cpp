@@ -1,4 +1,4 @@
-#include "primitives/nearest_neighbors.h"
+#include "core/nearest_neighbors.h"
 
 #include <nanoflann.hpp>
 

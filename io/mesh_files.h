@@ -1,37 +1,12 @@
 #pragma once
-/// An indexed triangle mesh (the flat structure at the edge of the mesh
-/// exporter) with its measures, and mesh file I/O: PLY, STL and OBJ out;
-/// STL (ASCII and binary), OFF, OBJ and PLY in.
+/// Mesh files: PLY, STL and OBJ out; STL (ASCII and binary), OFF, OBJ and PLY in.
 
-#include <array>
-#include <cstdint>
+#include "core/triangle_mesh.h"
+
 #include <filesystem>
 #include <iosfwd>
-#include <vector>
-
-#include "primitives/geometry.h"
 
 namespace csgvox {
-
-/// A triangle soup over shared vertices, in the scan's units. Triangles are
-/// counter-clockwise seen from outside, so that the normal
-/// (b - a) x (c - a) points out of the solid.
-struct TriangleMesh {
-  std::vector<Vec3> vertices;                           ///< vertex positions
-  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< vertex indices, counter-clockwise
-
-  /// Signed enclosed volume (divergence theorem); positive for a closed,
-  /// outward-oriented mesh. Meaningful only when isClosed().
-  double volume() const;
-  /// Total area of the triangles.
-  double area() const;
-  /// True when every edge is shared by exactly two triangles that use it in
-  /// opposite directions (a closed, consistently oriented surface). An empty
-  /// mesh is closed.
-  bool isClosed() const;
-  /// Axis-aligned bounds of the vertices (empty for an empty mesh).
-  Aabb bounds() const;
-};
 
 /// Writes `mesh` to `path` in the format named by the extension: `.ply`
 /// (binary little endian), `.stl` (binary) or `.obj` (case-insensitive). The

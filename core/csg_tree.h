@@ -3,8 +3,8 @@
 /// are union, intersection, difference (first child minus the others) and
 /// complement. Edits return new trees that share unchanged subtrees.
 
-#include "primitives/primitive.h"
-#include "primitives/set_operations.h"
+#include "core/primitive.h"
+#include "core/set_operations.h"
 
 #include <memory>
 #include <optional>

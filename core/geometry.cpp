@@ -1,4 +1,4 @@
-#include "primitives/geometry.h"
+#include "core/geometry.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "primitives/csg_tree.h"
+#include "core/csg_tree.h"
 
 #include <algorithm>
 #include <functional>
