@@ -1,18 +1,14 @@
 // csgvox detect SCAN -o OUTDIR [--epsilon E] [--min-points M] ...
 
-#include "primitives/bounding_box.h"
 #include "app/commands.h"
+#include "app/options.h"
 #include "app/console.h"
-#include "app/report.h"
 #include "io/errors.h"
+#include "io/output_set.h"
 #include "io/point_writer.h"
+#include "io/report.h"
 #include "io/scan_reader.h"
-#include "io/tree_json.h"
-#include "primitives/hypotheses.h"
-#include "primitives/regularization.h"
-#include "primitives/surface_detection.h"
-#include "primitives/surface_refinement.h"
-#include "voxel/voxel_grid.h"
+#include "pipeline/detect_and_fit.h"
 
 #include <cmath>
 #include <cstdio>
@@ -21,46 +17,14 @@
 namespace csgvox::app {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;
 
 namespace {
 
 struct DetectCommandOptions {
   std::string scan;
   std::string outDir;
-  DetectOptions detect;
-  HypothesisOptions hypotheses;
-  int resolution = 64;
+  DetectAndFitOptions fit;
 };
-
-Json surfaceJson(const Surface& s) {
-  Json j;
-  j["type"] = std::string(surfaceTypeName(s.type()));
-  j["inliers"] = s.inliers.size();
-  j["rms"] = s.rms;
-  if (s.type() != SurfaceType::Plane) j["convex"] = s.convex;
-  if (const auto* p = s.as<PlaneSurface>()) {
-    j["normal"] = toJson(p->normal);
-    j["offset"] = p->offset;
-  } else if (const auto* c = s.as<CylinderSurface>()) {
-    j["axis_point"] = toJson(c->axisPoint);
-    j["axis_dir"] = toJson(c->axisDir);
-    j["radius"] = c->radius;
-  } else if (const auto* c = s.as<ConeSurface>()) {
-    j["apex"] = toJson(c->apex);
-    j["axis_dir"] = toJson(c->axisDir);
-    j["half_angle"] = c->halfAngle;
-  } else if (const auto* sp = s.as<SphereSurface>()) {
-    j["center"] = toJson(sp->center);
-    j["radius"] = sp->radius;
-  } else if (const auto* t = s.as<TorusSurface>()) {
-    j["center"] = toJson(t->center);
-    j["axis_dir"] = toJson(t->axisDir);
-    j["major_radius"] = t->majorRadius;
-    j["minor_radius"] = t->minorRadius;
-  }
-  return j;
-}
 
 // A distinct, stable colour per surface; grey for unassigned points.
 Rgb8 surfaceColor(int surface) {
@@ -84,119 +48,77 @@ Rgb8 surfaceColor(int surface) {
 
 Command setupDetect(CLI::App& app, CommonOptions& common) {
   auto opt = std::make_shared<DetectCommandOptions>();
-  DetectOptions& d = opt->detect;
+  DetectOptions& d = opt->fit.detect;
   app.add_option("SCAN", opt->scan, "Scan (any format csgvox reads)")->required();
   app.add_option("-o,--output", opt->outDir, "Output directory")->required();
   app.add_option("--epsilon", d.epsilon,
                  "Largest inlier distance, fraction of the diagonal D (raised to "
                  "--noise-factor x the estimated noise)")
-      ->check(CLI::Range(1e-6, 0.5));
+      ->check(inRange(1e-6, 0.5));
   app.add_option("--noise-factor", d.noiseFactor, "epsilon >= this x estimated noise sigma")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(inRange(0.0, 100.0));
   app.add_option("--max-epsilon", d.maxEpsilon, "Cap on epsilon, fraction of D")
-      ->check(CLI::Range(1e-6, 0.5));
+      ->check(inRange(1e-6, 0.5));
   app.add_option("--cluster-epsilon", d.clusterEpsilon,
                  "Largest gap inside one patch, fraction of D")
-      ->check(CLI::Range(1e-6, 0.5));
+      ->check(inRange(1e-6, 0.5));
   app.add_option("--normal-threshold", d.normalThreshold,
                  "Smallest cosine between a point's normal and its surface's")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(inRange(0.0, 1.0));
   app.add_option("--min-points", d.minPoints, "Fewest inliers of a surface, fraction of points")
-      ->check(CLI::Range(1e-6, 1.0));
+      ->check(inRange(1e-6, 1.0));
   app.add_option("--probability", d.probability, "RANSAC probability of missing a shape")
-      ->check(CLI::Range(1e-6, 0.5));
+      ->check(inRange(1e-6, 0.5));
   app.add_option("--passes", d.passes, "RANSAC passes over the unassigned points")
-      ->check(CLI::Range(1, 10));
-  app.add_option("--res", opt->resolution,
-                 "Voxels along the longest side: the fit tolerance of cuboid hypotheses")
-      ->check(CLI::Range(8, 1024));
-  app.add_option("--max-candidates", opt->hypotheses.maxCandidates,
-                 "Cap on the number of hypotheses (0: none)");
-  app.add_option("--seed", d.seed, "Random seed");
+      ->check(inRange(1, 10));
+  app.add_option("--res", opt->fit.resolution,
+                 "Voxels along the longest side of the main job's grid: the fit tolerance of "
+                 "the hypotheses (the same --res gives the main job's candidates)")
+      ->check(inRange(8, 1024));
+  app.add_option("--max-candidates", opt->fit.hypotheses.maxCandidates,
+                 "Cap on the number of hypotheses (0: none)")
+      ->check(nonNegativeInteger());
+  app.add_option("--seed", opt->fit.seed, "Random seed (as the main job's --seed)")
+      ->check(nonNegativeInteger());
   return [opt, &common]() -> int {
     Console console(common.quiet);
+    common.subject = opt->scan;
     const fs::path scanPath(opt->scan);
+    const fs::path inputs[] = {scanPath};
+    OutputSet output(opt->outDir, {"surfaces.json", "candidates.json", "segments.ply"}, inputs);
     Stopwatch total;
     Stopwatch watch;
-    const Scan scan = readScan(scanPath);
+    ReadOptions ro;
+    ro.seed = opt->fit.seed;
+    const Scan scan = readScan(scanPath, ro);
     const double readSeconds = watch.seconds();
     console.info("read " + scanPath.string() + ": " + describeScan(scan));
-    const fs::path out(opt->outDir);
-    std::error_code ec;
-    fs::create_directories(out, ec);
-    if (ec || !fs::is_directory(out)) {
-      throw IoError(out.string() + ": cannot create the output directory");
-    }
 
-    watch = Stopwatch();
-    DetectionResult det = detectSurfaces(scan.cloud, opt->detect);
-    const double detectSeconds = watch.seconds();
+    const SurfacesAndCandidates found = detectAndFit(scan.cloud, opt->fit);
+    const DetectionResult& det = found.detection;
     console.info("detection: " + det.message);
-    if (det.status != DetectionResult::Status::Ok) {
-      throw ParseError(scanPath.string() + ": " + det.message);
-    }
-    watch = Stopwatch();
-    refineSurfaces(scan.cloud, det);
-    const double refineSeconds = watch.seconds();
-    watch = Stopwatch();
-    const RegularizationReport reg = regularizeSurfaces(det);
-    const double regularizeSeconds = watch.seconds();
+    if (!found.ok()) throw ParseError(scanPath.string() + ": " + det.message);
     console.info("refined and regularised " + std::to_string(det.surfaces.size()) +
-                 " surfaces: " + reg.summary());
+                 " surfaces: " + found.regularization.summary());
+    console.info("hypotheses: " + std::to_string(found.hypotheses.candidates.size()) +
+                 " candidates");
 
-    watch = Stopwatch();
-    HypothesisOptions ho = opt->hypotheses;
-    ho.seed = std::uint32_t(opt->detect.seed);
-    // The cuboid fit tolerance is one voxel at the requested resolution.
-    const OrientedBox box = minimalOrientedBox(scan.cloud.points);
-    ho.voxelSize = 2.0 * box.halfSize.maxCoeff() / double(opt->resolution);
-    const HypothesisSet hyp = generateHypotheses(scan.cloud, det.surfaces, ho);
-    const double hypothesisSeconds = watch.seconds();
-    console.info("hypotheses: " + std::to_string(hyp.candidates.size()) + " candidates");
-
-    Json surfaces = Json::array();
-    for (const Surface& s : det.surfaces) surfaces.push_back(surfaceJson(s));
-    Report sj;
-    sj.json["scan"] = scanPath.string();
-    sj.json["diagonal"] = det.diagonal;
-    sj.json["noise"] = det.noise;
-    sj.json["epsilon"] = det.epsilon;
-    sj.json["surfaces"] = std::move(surfaces);
-    sj.write(out / "surfaces.json");
-
-    Json cands = Json::array();
-    for (const Candidate& c : hyp.candidates) {
-      Json j;
-      j["origin"] = std::string(candidateOriginName(c.origin));
-      j["surfaces"] = c.surfaces;
-      j["support"] = c.support;
-      if (c.tool) j["tool"] = true;
-      j["tree"] = Json::parse(treeNodeJson(c.tree));
-      cands.push_back(std::move(j));
-    }
-    Report cj;
-    cj.json["scan"] = scanPath.string();
-    Json counts;
-    for (std::size_t o = 0; o < kCandidateOriginCount; ++o) {
-      counts[std::string(candidateOriginName(CandidateOrigin(o)))] = hyp.stats.returned.count[o];
-    }
-    cj.json["counts"] = counts;
-    cj.json["capped"] = hyp.stats.capped;
-    cj.json["candidates"] = std::move(cands);
-    cj.write(out / "candidates.json");
-
+    const std::string scanName = scanPath.string();
+    writeJsonFile(output.path("surfaces.json"), surfacesJson(scanName, det));
+    writeJsonFile(output.path("candidates.json"), candidatesJson(scanName, found.hypotheses));
     std::vector<Rgb8> colors(scan.cloud.size());
     for (std::size_t i = 0; i < colors.size(); ++i) colors[i] = surfaceColor(det.assignment[i]);
-    writePointCloudPly(out / "segments.ply", scan.cloud, colors);
+    writePointCloudPly(output.path("segments.ply"), scan.cloud, colors);
+    output.commit();
 
     char buf[256];
     std::snprintf(buf, sizeof(buf),
                   "read %.2f s, detection %.2f s, refinement %.2f s, regularisation %.3f s, "
                   "hypotheses %.2f s, total %.2f s",
-                  readSeconds, detectSeconds, refineSeconds, regularizeSeconds,
-                  hypothesisSeconds, total.seconds());
+                  readSeconds, found.detectSeconds, found.refineSeconds, found.regularizeSeconds,
+                  found.hypothesisSeconds, total.seconds());
     console.info(buf);
-    console.info("wrote surfaces.json, candidates.json, segments.ply in " + out.string());
+    console.info("wrote surfaces.json, candidates.json, segments.ply in " + output.folder().string());
     return 0;
   };
 }

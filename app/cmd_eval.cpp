@@ -1,8 +1,9 @@
 // csgvox eval TREE.json SCAN [--json]
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "app/console.h"
-#include "app/report.h"
+#include "io/report.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "mesh/fit_metrics.h"
@@ -30,10 +31,12 @@ Command setupEval(CLI::App& app, CommonOptions& common) {
   app.add_flag("--json", opt->json, "Print the metrics as JSON on stdout");
   app.add_option("--surface-samples", opt->fit.surfaceSamples,
                  "Points sampled on the tree's boundary for distances")
-      ->check(CLI::Range(std::size_t(1000), std::size_t(50'000'000)));
-  app.add_option("--seed", opt->fit.seed, "Random seed of the boundary sampling");
+      ->check(inRange(1000, 50'000'000));
+  app.add_option("--seed", opt->fit.seed, "Random seed of the boundary sampling")
+      ->check(nonNegativeInteger());
   return [opt, &common]() -> int {
     Console console(common.quiet);
+    common.subject = opt->tree;
     const CsgTree tree = readTreeJson(std::filesystem::path(opt->tree));
     const Scan scan = readScan(std::filesystem::path(opt->scan));
     console.info("read " + opt->scan + ": " + describeScan(scan));

@@ -3,20 +3,23 @@
 // tree.json, tree.scad, tree.txt, mesh.ply, report.json.
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "app/console.h"
-#include "app/report.h"
 #include "io/errors.h"
+#include "io/output_set.h"
+#include "io/report.h"
 #include "mesh/mesh_export.h"
 #include "io/scad_export.h"
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
-#include "pipeline/reconstruct.h"
 #include "io/mesh_files.h"
+#include "pipeline/reconstruct.h"
 #include "mesh/fit_metrics.h"
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 namespace csgvox::app {
 
@@ -53,8 +56,9 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
   app.add_option("-o,--output", opt->outDir,
                  "Output directory (default: <scan folder>/<scan name>-csgvox/)");
   app.add_option("--res", opt->resolution, "Voxels along the longest side of the part")
-      ->check(CLI::Range(8, 1024));
-  app.add_option("--seed", opt->seed, "Random seed; the same seed gives the same tree");
+      ->check(inRange(8, 1024));
+  app.add_option("--seed", opt->seed, "Random seed; the same seed gives the same tree")
+      ->check(nonNegativeInteger());
   app.add_option("--label", opt->labelMethod,
                  "Voxel labelling: winding (generalised winding number) or vote (Wu's K-nearest "
                  "normal vote)")
@@ -64,23 +68,31 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                  "voxel; default) or inside (always inside, Wu's rule)")
       ->check(CLI::IsMember({"centre", "inside"}));
   app.add_option("-K,--neighbors", opt->pipeline.labels.neighbors, "vote: nearest points per voxel")
-      ->check(CLI::Range(1, 1000));
+      ->check(inRange(1, 1000));
   app.add_option("--vote-epsilon", opt->pipeline.labels.epsilon,
                  "vote: outside when more than this fraction of neighbours face the voxel")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(inRange(0.0, 1.0));
   app.add_option("--alpha", opt->pipeline.construct.subtree.alpha, "Weight of the fit term of Wu Eq. 4")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(inRange(0.0, 100.0));
   app.add_option("--beta", opt->pipeline.construct.unionChoice.beta, "Weight of the fit term of Wu Eq. 6")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(inRange(0.0, 100.0));
   app.add_option("--time-limit", opt->pipeline.timeLimit,
                  "Seconds for the reconstruction (0: none). Detection past it fails; the "
                  "optimisations past it keep the best tree found so far")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(inRange(0.0, 1e6));
   app.add_option("--mesh-res", opt->meshResolution, "Resolution of mesh.ply")
-      ->check(CLI::Range(8, 2048));
+      ->check(inRange(8, 2048));
   return [opt, &common]() -> int {
     Console console(common.quiet);
+    common.subject = opt->scan;
     const fs::path scanPath(opt->scan);
+    // Outputs are checked against the input before any work, and appear
+    // together at the end or not at all.
+    const fs::path inputs[] = {scanPath};
+    OutputSet output(opt->outDir.empty()
+                         ? scanPath.parent_path() / (scanPath.stem().string() + "-csgvox")
+                         : fs::path(opt->outDir),
+                     {"tree.json", "tree.scad", "tree.txt", "mesh.ply", "report.json"}, inputs);
     nlohmann::ordered_json timings;
     Stopwatch watch;
     ReadOptions ro;
@@ -124,44 +136,45 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                  std::to_string(tree.operationCount()) + " operations, depth " +
                  std::to_string(tree.depth()));
 
-    fs::path out = opt->outDir.empty()
-                       ? scanPath.parent_path() / (scanPath.stem().string() + "-csgvox")
-                       : fs::path(opt->outDir);
-    std::error_code ec;
-    fs::create_directories(out, ec);
-    if (ec || !fs::is_directory(out)) {
-      throw IoError(out.string() + ": cannot create the output directory");
-    }
     watch = Stopwatch();
-    writeTreeJson(out / "tree.json", tree);
-    writeScad(out / "tree.scad", tree);
-    writeTreeText(out / "tree.txt", tree);
+    writeTreeJson(output.path("tree.json"), tree);
+    writeScad(output.path("tree.scad"), tree);
+    writeTreeText(output.path("tree.txt"), tree);
     MeshOptions mo;
     mo.resolution = opt->meshResolution;
-    writeMesh(out / "mesh.ply", meshTree(tree, mo));
+    writeMesh(output.path("mesh.ply"), meshTree(tree, mo));
     timings["export"] = watch.seconds();
 
+    // The tree is the result: a metric that cannot be computed is a warning
+    // in the report, not a failed job.
     watch = Stopwatch();
-    FitOptions fo;
-    fo.surfaceSamples = 100000;
-    fo.seed = opt->seed;
-    const FitMetrics fit = evaluateFit(tree, scan.cloud, fo);
+    nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+    std::optional<FitMetrics> fit;
+    try {
+      FitOptions fo;
+      fo.surfaceSamples = 100000;
+      fo.seed = opt->seed;
+      fit = evaluateFit(tree, scan.cloud, fo);
+    } catch (const std::exception& e) {
+      warnings.push_back(std::string("fit metrics: ") + e.what());
+      console.info("warning: fit metrics not computed: " + std::string(e.what()));
+    }
     timings["metrics"] = watch.seconds();
 
-    Report report;
-    report.json["status"] = "ok";
-    report.json["input"] = scanJson(scanPath, scan);
-    report.json["parameters"] = {{"res", opt->resolution},
+    nlohmann::ordered_json report;
+    report["status"] = "ok";
+    report["input"] = scanJson(scanPath, scan);
+    report["parameters"] = {{"res", opt->resolution},
                                  {"seed", opt->seed},
                                  {"label", opt->labelMethod},
                                  {"label_boundary", opt->boundary},
                                  {"alpha", opt->pipeline.construct.subtree.alpha},
                                  {"beta", opt->pipeline.construct.unionChoice.beta},
                                  {"time_limit_s", opt->pipeline.timeLimit}};
-    report.json["grid"] = {{"dims", {dims[0], dims[1], dims[2]}},
+    report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}},
                            {"voxel_size", grid.voxelSize()}};
     const ConstructStats& st = built.stats;
-    report.json["counts"] = {{"surfaces", det.surfaces.size()},
+    report["counts"] = {{"surfaces", det.surfaces.size()},
                              {"hypotheses", hyp.candidates.size()},
                              {"usable_roots", st.usableRoots},
                              {"truncation_roots", st.truncationRoots},
@@ -170,21 +183,29 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                              {"chosen", st.chosen},
                              {"proved_optimal", st.provedOptimal},
                              {"time_limit_hit", rec.timeLimitHit}};
-    report.json["tree"] = {{"primitives", tree.primitiveCount()},
+    report["tree"] = {{"primitives", tree.primitiveCount()},
                            {"operations", tree.operationCount()},
                            {"depth", tree.depth()}};
-    report.json["metrics"] = {{"voxel_iou", rec.voxelIou()},
-                              {"rmse", fit.rmse},
-                              {"rmse_relative", fit.rmse / fit.diagonal},
-                              {"chamfer", fit.chamfer},
-                              {"chamfer_relative", fit.chamfer / fit.diagonal},
-                              {"within_1pct", fit.withinFraction},
-                              {"normal_agreement", fit.normalAgreement}};
-    report.json["timings_s"] = timings;
-    report.write(out / "report.json");
-    console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D", 100 * fit.chamfer / fit.diagonal,
-                     100 * fit.rmse / fit.diagonal));
-    console.info("wrote tree.json, tree.scad, tree.txt, mesh.ply, report.json in " + out.string());
+    nlohmann::ordered_json metrics = {{"voxel_iou", rec.voxelIou()}};
+    if (fit) {
+      metrics["rmse"] = fit->rmse;
+      metrics["rmse_relative"] = fit->rmse / fit->diagonal;
+      metrics["chamfer"] = fit->chamfer;
+      metrics["chamfer_relative"] = fit->chamfer / fit->diagonal;
+      metrics["within_1pct"] = fit->withinFraction;
+      metrics["normal_agreement"] = fit->normalAgreement;
+    }
+    report["metrics"] = std::move(metrics);
+    report["warnings"] = std::move(warnings);
+    report["timings_s"] = timings;
+    writeJsonFile(output.path("report.json"), report);
+    output.commit();
+    if (fit) {
+      console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D",
+                       100 * fit->chamfer / fit->diagonal, 100 * fit->rmse / fit->diagonal));
+    }
+    console.info("wrote tree.json, tree.scad, tree.txt, mesh.ply, report.json in " +
+                 output.folder().string());
     return 0;
   };
 }

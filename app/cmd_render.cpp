@@ -1,6 +1,7 @@
 // csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "app/console.h"
 #include "io/errors.h"
 #include "io/file_util.h"
@@ -34,11 +35,12 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
       ->required();
   app.add_option("--res", opt->resolution,
                  "Mesh resolution: grid cells along the longest side of the part")
-      ->check(CLI::Range(8, 2048));
+      ->check(inRange(8, 2048));
   app.add_option("--fn", opt->facets, "OpenSCAD $fn for curved primitives")
-      ->check(CLI::Range(3, 1000));
+      ->check(inRange(3, 1000));
   return [opt, &common]() -> int {
     Console console(common.quiet);
+    common.subject = opt->tree;
     const CsgTree tree = readTreeJson(std::filesystem::path(opt->tree));
     const std::string ext = lowerExtension(opt->output);
     requireNotInput(opt->output, opt->tree);

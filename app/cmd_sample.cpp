@@ -1,6 +1,7 @@
 // csgvox sample TREE.json -o SCAN.ply [--points N] [--noise R] [--drop K] [--seed S]
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "app/console.h"
 #include "io/errors.h"
 #include "io/file_util.h"
@@ -30,20 +31,22 @@ Command setupSample(CLI::App& app, CommonOptions& common) {
                  "Output scan: .ply (binary, x y z nx ny nz) or .xyz (text, x y z nx ny nz)")
       ->required();
   app.add_option("--points", opt->sample.points, "Number of points")
-      ->check(CLI::Range(std::size_t(1), std::size_t(100'000'000)));
+      ->check(inRange(1, 100'000'000));
   app.add_option("--noise", opt->sample.noise,
                  "Gaussian position noise sigma, as a fraction of the bounding-box diagonal")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(inRange(0.0, 1.0));
   app.add_option("--drop", opt->sample.dropPatches,
                  "Remove this many round patches, imitating scanner holes")
-      ->check(CLI::Range(0, 1000));
+      ->check(inRange(0, 1000));
   app.add_option("--drop-radius", opt->sample.patchRadius,
                  "Radius of each removed patch, as a fraction of the diagonal")
-      ->check(CLI::Range(1e-6, 1.0));
-  app.add_option("--seed", opt->sample.seed, "Random seed");
+      ->check(inRange(1e-6, 1.0));
+  app.add_option("--seed", opt->sample.seed, "Random seed")
+      ->check(nonNegativeInteger());
   app.add_flag("--ascii", opt->ascii, "Write ASCII PLY instead of binary");
   return [opt, &common]() -> int {
     Console console(common.quiet);
+    common.subject = opt->tree;
     const CsgTree tree = readTreeJson(std::filesystem::path(opt->tree));
     const std::string ext = lowerExtension(opt->output);
     requireNotInput(opt->output, opt->tree);

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <string>
 
 namespace csgvox::app {
 
@@ -13,6 +14,7 @@ namespace csgvox::app {
 struct CommonOptions {
   bool quiet = false;   ///< no progress lines on stderr
   int threads = 0;      ///< worker threads, 0 = all cores
+  std::string subject;  ///< the input being worked on, put in front of error messages not naming it
 };
 
 /// A command: sets up its options on `app` and returns the function that runs it.

@@ -1,6 +1,7 @@
 // csgvox: from a 3D scan of a mechanical part to a compact, editable CSG tree.
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "io/errors.h"
 #include "primitives/solver_log.h"
 
@@ -44,7 +45,7 @@ int main(int argc, char** argv) {
   cli.set_version_flag("--version", "csgvox 0.1.0");
   cli.add_flag("-q,--quiet", common.quiet, "No progress lines on stderr");
   cli.add_option("--threads", common.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 1024));
+      ->check(app::inRange(0, 1024));
   app::Command run;
   if (sub) {
     CLI::App* cmd = nullptr;
@@ -86,16 +87,20 @@ int main(int argc, char** argv) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                      std::size_t(common.threads));
   }
+  // One line naming the input and the problem. Library messages that do
+  // not name the input get it in front.
+  const auto fail = [&](std::string message) {
+    if (!common.subject.empty() && message.find(common.subject) == std::string::npos) {
+      message = common.subject + ": " + message;
+    }
+    std::fprintf(stderr, "csgvox: error: %s\n", message.c_str());
+    return 1;
+  };
   try {
     return run();
-  } catch (const IoError& e) {
-    std::fprintf(stderr, "csgvox: error: %s\n", e.what());
-  } catch (const ParseError& e) {
-    std::fprintf(stderr, "csgvox: error: %s\n", e.what());
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "csgvox: error: out of memory\n");
+    return fail("out of memory");
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "csgvox: error: %s\n", e.what());
+    return fail(e.what());
   }
-  return 1;
 }

@@ -2,14 +2,9 @@
 // bundled part at several sizes: time per stage and peak memory.
 // Run: build/bench/bench_detection [data/<part>/tree.json] [noise]
 
-#include "primitives/bounding_box.h"
 #include "io/tree_json.h"
-#include "primitives/hypotheses.h"
-#include "primitives/regularization.h"
-#include "primitives/surface_detection.h"
-#include "primitives/surface_refinement.h"
 #include "mesh/surface_sampler.h"
-#include "voxel/voxel_grid.h"
+#include "pipeline/detect_and_fit.h"
 
 #include "bench_common.h"
 
@@ -44,23 +39,13 @@ int main(int argc, char** argv) {
     so.seed = 1;
     const PointCloud scan = sampleSurface(tree, so).cloud;
     const auto t0 = std::chrono::steady_clock::now();
-    auto t = t0;
-    DetectionResult det = detectSurfaces(scan);
-    const double detect = seconds(t);
-    t = std::chrono::steady_clock::now();
-    refineSurfaces(scan, det);
-    const double refine = seconds(t);
-    t = std::chrono::steady_clock::now();
-    regularizeSurfaces(det);
-    const double regularize = seconds(t);
-    t = std::chrono::steady_clock::now();
-    HypothesisOptions ho;
-    ho.voxelSize = 2.0 * minimalOrientedBox(scan.points).halfSize.maxCoeff() / 64.0;
-    const HypothesisSet hyp = generateHypotheses(scan, det.surfaces, ho);
-    const double hypotheses = seconds(t);
-    std::printf("%8zu %9.3f %9.3f %9.4f %9.3f %9.3f %9zu %8zu %10zu %9.0f\n", n, detect, refine,
-                regularize, hypotheses, seconds(t0), det.surfaces.size(), hyp.candidates.size(),
-                hyp.stats.cuboids.eq3Count, peakMiB());
+    // The main job's configuration: res 64, seed 1.
+    const SurfacesAndCandidates found = detectAndFit(scan);
+    const HypothesisSet& hyp = found.hypotheses;
+    std::printf("%8zu %9.3f %9.3f %9.4f %9.3f %9.3f %9zu %8zu %10zu %9.0f\n", n,
+                found.detectSeconds, found.refineSeconds, found.regularizeSeconds,
+                found.hypothesisSeconds, seconds(t0), found.detection.surfaces.size(),
+                hyp.candidates.size(), hyp.stats.cuboids.eq3Count, peakMiB());
     std::fflush(stdout);
   }
   return 0;

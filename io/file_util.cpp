@@ -18,6 +18,10 @@ void requireReadableFile(const fs::path& path) {
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st)) throw IoError(path.string() + ": no such file");
   if (fs::is_directory(st)) throw IoError(path.string() + ": is a directory, not a file");
+  // A FIFO, socket or device could block the reader or never end.
+  if (!fs::is_regular_file(st)) {
+    throw IoError(path.string() + ": is not a regular file (a pipe, socket or device)");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot be opened for reading");
 }

@@ -9,7 +9,10 @@
 namespace csgvox {
 
 /// Checks that `path` names an existing, readable regular file.
-/// @throw IoError "<path>: no such file" / "is a directory" / "cannot be read".
+/// Pipes, sockets and devices are refused without being opened, so a FIFO
+/// with no writer cannot block the caller.
+/// @throw IoError "<path>: no such file" / "is a directory" / "is not a
+///        regular file" / "cannot be opened for reading".
 void requireReadableFile(const std::filesystem::path& path);
 
 /// Writes a file atomically: `write` fills a temporary file next to `path`,

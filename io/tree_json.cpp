@@ -234,10 +234,12 @@ void writeTreeJson(std::ostream& out, const CsgTree& tree) {
   out << j.dump(2) << "\n";
 }
 
-std::string treeNodeJson(const CsgTree& tree) {
+Json treeNodeToJson(const CsgTree& tree) {
   if (tree.empty()) throw std::invalid_argument("cannot write an empty tree");
-  return nodeToJson(*tree.root()).dump();
+  return nodeToJson(*tree.root());
 }
+
+std::string treeNodeJson(const CsgTree& tree) { return treeNodeToJson(tree).dump(); }
 
 void writeTreeJson(const std::filesystem::path& path, const CsgTree& tree) {
   writeFileAtomically(path, [&](std::ostream& out) { writeTreeJson(out, tree); });

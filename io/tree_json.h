@@ -3,6 +3,8 @@
 
 #include "core/csg_tree.h"
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <filesystem>
 #include <iosfwd>
 #include <string>
@@ -23,6 +25,9 @@ void writeTreeJson(std::ostream& out, const CsgTree& tree);
 /// operation object, as inside "root"), for embedding in other documents.
 /// @throw std::invalid_argument for an empty tree.
 std::string treeNodeJson(const CsgTree& tree);
+/// The tree's root node as a JSON value, for embedding in other documents.
+/// @throw std::invalid_argument for an empty tree.
+nlohmann::ordered_json treeNodeToJson(const CsgTree& tree);
 
 /// Writes a tree.json file atomically. @throw IoError.
 void writeTreeJson(const std::filesystem::path& path, const CsgTree& tree);

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <vector>
 
 namespace csgvox {
 namespace {
@@ -16,17 +17,147 @@ using Rng = std::mt19937_64;
 
 double uniform(Rng& rng) { return std::uniform_real_distribution<double>(0.0, 1.0)(rng); }
 
+// A piece of a primitive's surface near the solid, for primitives much
+// larger than the solid (a nearly flat face fitted as a cylinder of radius
+// 4000 on a part 10 across): sampling their whole surface would almost
+// never hit the solid. Each piece is a superset of the surface's part
+// within the window (a ball around the solid's bounds) and is sampled
+// uniformly; points off the primitive's surface are rejected like every
+// point off the solid's boundary, so the density stays uniform.
+struct Piece {
+  enum class Kind { Parallelogram, CylinderSide, SphereCap } kind = Kind::Parallelogram;
+  double area = 0.0;
+  Vec3 origin = Vec3::Zero(), u = Vec3::Zero(), v = Vec3::Zero();  // origin + s u + t v
+  Mat3 frame = Mat3::Identity();  // cylinder / sphere cap: third axis = axis or cap direction
+  double radius = 0.0;
+  double angle0 = 0.0, angle1 = 0.0;    // cylinder side: angles in the frame's first two axes
+  double height0 = 0.0, height1 = 0.0;  // cylinder side: along the axis, from origin
+  double cosCap = -1.0;                 // sphere cap: cosine of its angular radius
+};
+
 // The part of one primitive's surface that is sampled, with its area.
 struct SurfaceDomain {
   const Primitive* primitive = nullptr;
   double area = 0.0;
   // Half-spaces: a rectangle in the plane covering the tree's bounds.
   Vec3 origin = Vec3::Zero(), u = Vec3::Zero(), v = Vec3::Zero();
+  // Primitives reaching far past the solid: pieces near it (else empty).
+  std::vector<Piece> pieces;
 };
+
+// The ball every boundary point of the solid lies in.
+struct Window {
+  Vec3 center;
+  double radius;
+};
+
+// Rectangle [lo, hi] of a plane (origin, unit axes a, b) as a piece.
+void addRectangle(std::vector<Piece>& pieces, const Vec3& origin, const Vec3& a, const Vec3& b,
+                  double alo, double ahi, double blo, double bhi) {
+  if (!(ahi > alo) || !(bhi > blo)) return;
+  Piece p;
+  p.origin = origin + alo * a + blo * b;
+  p.u = (ahi - alo) * a;
+  p.v = (bhi - blo) * b;
+  p.area = (ahi - alo) * (bhi - blo);
+  pieces.push_back(p);
+}
+
+// A face or cap in the plane through `centre` with unit in-plane axes a, b
+// and normal n, of half extents ha, hb: the part within the window.
+void addClippedFace(std::vector<Piece>& pieces, const Window& w, const Vec3& centre,
+                    const Vec3& a, const Vec3& b, const Vec3& n, double ha, double hb) {
+  const Vec3 q = w.center - centre;
+  if (std::abs(q.dot(n)) > w.radius) return;
+  const double qa = q.dot(a), qb = q.dot(b);
+  addRectangle(pieces, centre, a, b, std::max(-ha, qa - w.radius), std::min(ha, qa + w.radius),
+               std::max(-hb, qb - w.radius), std::min(hb, qb + w.radius));
+}
+
+std::vector<Piece> piecesNear(const Primitive& prim, const Window& w) {
+  std::vector<Piece> pieces;
+  if (const auto* b = prim.as<Box>()) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+      for (const double side : {-1.0, 1.0}) {
+        addClippedFace(pieces, w, b->center + side * b->halfSize[axis] * b->axes.col(axis),
+                       b->axes.col(i), b->axes.col(j), b->axes.col(axis), b->halfSize[i],
+                       b->halfSize[j]);
+      }
+    }
+  } else if (const auto* c = prim.as<Cylinder>()) {
+    const Mat3 f = frameFromAxis(c->axis);
+    for (const double side : {-1.0, 1.0}) {
+      addClippedFace(pieces, w, c->center + side * 0.5 * c->height * c->axis, f.col(0), f.col(1),
+                     c->axis, c->radius, c->radius);
+    }
+    // Side: the angles whose points can be within the window's radius of
+    // its centre, and the heights along the axis within it.
+    const Vec3 q = w.center - c->center;
+    const double t = q.dot(c->axis);
+    const Vec3 radial = q - t * c->axis;
+    const double d = radial.norm();
+    double half = std::numbers::pi;
+    if (d > 0.0) {
+      const double cosHalf = (c->radius * c->radius + d * d - w.radius * w.radius) / (2.0 * c->radius * d);
+      if (cosHalf > 1.0) half = -1.0;  // the side does not reach the window
+      else if (cosHalf > -1.0) half = std::acos(cosHalf);
+    }
+    const double h0 = std::max(-0.5 * c->height, t - w.radius);
+    const double h1 = std::min(0.5 * c->height, t + w.radius);
+    if (half > 0.0 && h1 > h0) {
+      Piece p;
+      p.kind = Piece::Kind::CylinderSide;
+      p.origin = c->center;
+      p.frame = f;
+      p.radius = c->radius;
+      const double phi = std::atan2(radial.dot(f.col(1)), radial.dot(f.col(0)));
+      p.angle0 = phi - half;
+      p.angle1 = phi + half;
+      p.height0 = h0;
+      p.height1 = h1;
+      p.area = c->radius * 2.0 * half * (h1 - h0);
+      pieces.push_back(p);
+    }
+  } else if (const auto* sp = prim.as<Sphere>()) {
+    const Vec3 q = w.center - sp->center;
+    const double d = q.norm();
+    Piece p;
+    p.kind = Piece::Kind::SphereCap;
+    p.origin = sp->center;
+    p.radius = sp->radius;
+    p.frame = frameFromAxis(d > 0.0 ? Vec3(q / d) : Vec3::UnitZ());
+    p.cosCap = -1.0;
+    if (d > 0.0) {
+      p.cosCap = std::clamp((sp->radius * sp->radius + d * d - w.radius * w.radius) /
+                                (2.0 * sp->radius * d), -1.0, 1.0);
+    }
+    p.area = 2.0 * std::numbers::pi * sp->radius * sp->radius * (1.0 - p.cosCap);
+    if (p.area > 0.0) pieces.push_back(p);
+  }
+  return pieces;
+}
 
 SurfaceDomain makeDomain(const Primitive& p, const Aabb& bounds) {
   SurfaceDomain d;
   d.primitive = &p;
+  // A primitive within the solid's bounds (the usual case) is sampled whole.
+  const Aabb own = p.bounds();
+  const bool within = (own.min.array() >= bounds.min.array()).all() &&
+                      (own.max.array() <= bounds.max.array()).all();
+  if (!within && !p.as<HalfSpace>()) {
+    const Window window{bounds.center(), 0.5 * bounds.diagonal()};
+    d.pieces = piecesNear(p, window);
+    if (!d.pieces.empty()) {
+      for (const Piece& piece : d.pieces) d.area += piece.area;
+      // Only where it saves much: most primitives are sampled as before.
+      if (d.area < 0.5 * p.surfaceArea()) return d;
+      d.pieces.clear();
+      d.area = 0.0;
+    } else if (p.as<Box>() || p.as<Cylinder>() || p.as<Sphere>()) {
+      return d;  // its surface does not reach the solid
+    }
+  }
   if (const auto* h = p.as<HalfSpace>()) {
     const Mat3 frame = frameFromAxis(h->normal);
     const Vec3 onPlane = h->offset * h->normal;
@@ -57,8 +188,37 @@ Vec3 onDisc(const Mat3& frame, double r, Rng& rng) {
   return rad * (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
 }
 
+// A uniformly distributed point on a piece.
+Vec3 samplePiece(const Piece& p, Rng& rng) {
+  switch (p.kind) {
+    case Piece::Kind::Parallelogram: return p.origin + uniform(rng) * p.u + uniform(rng) * p.v;
+    case Piece::Kind::CylinderSide: {
+      const double a = p.angle0 + (p.angle1 - p.angle0) * uniform(rng);
+      const double t = p.height0 + (p.height1 - p.height0) * uniform(rng);
+      return p.origin + p.radius * (std::cos(a) * p.frame.col(0) + std::sin(a) * p.frame.col(1)) +
+             t * p.frame.col(2);
+    }
+    case Piece::Kind::SphereCap: {
+      // Archimedes: the height along the cap's axis is uniform.
+      const double z = p.cosCap + (1.0 - p.cosCap) * uniform(rng);
+      const double a = kTwoPi * uniform(rng);
+      const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+      return p.origin + p.radius * (rho * (std::cos(a) * p.frame.col(0) +
+                                           std::sin(a) * p.frame.col(1)) +
+                                    z * p.frame.col(2));
+    }
+  }
+  return p.origin;
+}
+
 // A uniformly distributed point on the primitive's (clipped) surface.
 Vec3 samplePoint(const SurfaceDomain& d, Rng& rng) {
+  if (!d.pieces.empty()) {
+    double pick = uniform(rng) * d.area;
+    std::size_t k = 0;
+    while (k + 1 < d.pieces.size() && pick > d.pieces[k].area) pick -= d.pieces[k++].area;
+    return samplePiece(d.pieces[k], rng);
+  }
   const Primitive& p = *d.primitive;
   switch (p.type()) {
     case PrimitiveType::HalfSpace: return d.origin + uniform(rng) * d.u + uniform(rng) * d.v;
@@ -195,6 +355,8 @@ SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
       Candidate& c = cands[i];
       if (!bounds.contains(c.point)) return;
       if (std::abs(tree.value(c.point)) > onSurface) return;
+      const SurfaceDomain& domain = domains[c.domain];
+      if (!domain.pieces.empty() && std::abs(domain.primitive->value(c.point)) > onSurface) return;
       Vec3 g;
       domains[c.domain].primitive->valueAndGradient(c.point, g);
       const double len = g.norm();

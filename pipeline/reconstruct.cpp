@@ -1,9 +1,6 @@
-#include "primitives/bounding_box.h"
 #include "pipeline/reconstruct.h"
 
 #include "core/nearest_neighbors.h"
-#include "primitives/regularization.h"
-#include "primitives/surface_refinement.h"
 
 #include <algorithm>
 #include <chrono>
@@ -47,77 +44,6 @@ class StageClock {
 
 }  // namespace
 
-// The frame of the voxel grid. Voxels aligned with the part's faces see
-// them without staircase aliasing, but the minimal oriented box of a noisy
-// scan comes out tilted by a fraction of a degree (its volume is flat near
-// the minimum), and an L-shaped part's can even turn diagonal. So the frame
-// comes from the detected surfaces: the direction (plane normal or axis)
-// with most inliers, then the heaviest direction orthogonal to it within
-// two degrees. The minimal box is kept when no surface gives a direction or
-// when the aligned box is more than a quarter larger.
-OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces) {
-  const OrientedBox minimal = minimalOrientedBox(scan.points);
-  struct Direction {
-    Vec3 dir;
-    double weight;
-  };
-  std::vector<Direction> dirs;
-  const double cosParallel = std::cos(2.0 * std::numbers::pi / 180.0);
-  for (const Surface& s : surfaces) {
-    Vec3 d;
-    if (const auto* p = s.as<PlaneSurface>()) {
-      d = p->normal;
-    } else if (const auto* c = s.as<CylinderSurface>()) {
-      d = c->axisDir;
-    } else if (const auto* c = s.as<ConeSurface>()) {
-      d = c->axisDir;
-    } else if (const auto* t = s.as<TorusSurface>()) {
-      d = t->axisDir;
-    } else {
-      continue;
-    }
-    if (!(d.norm() > 0.0)) continue;
-    d.normalize();
-    const double w = double(s.inliers.size());
-    auto same = std::find_if(dirs.begin(), dirs.end(), [&](const Direction& o) {
-      return std::abs(o.dir.dot(d)) >= cosParallel;
-    });
-    if (same != dirs.end()) {
-      same->weight += w;
-    } else {
-      dirs.push_back({d, w});
-    }
-  }
-  if (dirs.empty()) return minimal;
-  std::stable_sort(dirs.begin(), dirs.end(),
-                   [](const Direction& a, const Direction& b) { return a.weight > b.weight; });
-  const Vec3 a1 = dirs.front().dir;
-  const double sinOrthogonal = std::sin(2.0 * std::numbers::pi / 180.0);
-  Vec3 a2 = Vec3::Zero();
-  for (const Direction& d : dirs) {
-    if (std::abs(d.dir.dot(a1)) <= sinOrthogonal) {
-      a2 = d.dir;
-      break;
-    }
-  }
-  if (a2 == Vec3::Zero()) {
-    // Only one direction: the minimal box's axis most orthogonal to it.
-    double best = 2.0;
-    for (int k = 0; k < 3; ++k) {
-      const double c = std::abs(minimal.axes.col(k).dot(a1));
-      if (c < best) best = c, a2 = minimal.axes.col(k);
-    }
-  }
-  a2 = (a2 - a2.dot(a1) * a1).normalized();
-  Mat3 frame;
-  frame.col(0) = a1;
-  frame.col(1) = a2;
-  frame.col(2) = a1.cross(a2);
-  const OrientedBox aligned = boxAlong(scan.points, frame);
-  const double volume = aligned.halfSize.prod(), minimalVolume = minimal.halfSize.prod();
-  return volume <= 1.25 * minimalVolume ? aligned : minimal;
-}
-
 double Reconstruction::voxelIou() const {
   const std::size_t either = VoxelSet::countOr(construction.voxels, labels.inside);
   if (either == 0) return 1.0;
@@ -126,8 +52,6 @@ double Reconstruction::voxelIou() const {
 
 Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options,
                            const StageCallback& onStage, const ProgressCallback& progress) {
-  if (scan.empty()) throw std::invalid_argument("the scan has no points");
-  if (!scan.hasNormals()) throw std::invalid_argument("the scan has no normals");
   Reconstruction out;
   StageClock clock(out, onStage);
   const bool limited = options.timeLimit > 0.0;
@@ -143,40 +67,35 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
     return out;
   };
 
-  clock.start("detect");
-  DetectOptions dopt = options.detect;
-  dopt.seed = options.seed;
-  // Detection stops at the deadline; the optimisation handles the deadline
-  // inside its solvers and keeps going with local search only.
+  // Detection stops at the deadline. After it, a limit never costs the
+  // tree: labels and description sets run to the end, and the optimisation
+  // stops searching at the deadline and keeps the best tree it has.
+  DetectAndFitOptions fo;
+  fo.resolution = options.resolution;
+  fo.seed = options.seed;
+  fo.detect = options.detect;
   const auto report = [&](double fraction, std::string_view step) {
     if (progress) progress(fraction, step);
     return true;
   };
-  out.detection = detectSurfaces(scan, dopt, [&](double fraction, std::string_view step) {
-    report(fraction, step);
-    return !pastDeadline();
-  });
+  SurfacesAndCandidates found =
+      detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
+        report(fraction, step);
+        return !pastDeadline();
+      });
+  out.detection = std::move(found.detection);
   if (out.detection.status == DetectionResult::Status::Cancelled) return timedOut("detection");
   if (!out.detection.ok()) {
     out.status = Reconstruction::Status::NoSurfaces;
     out.message = out.detection.message;
     return out;
   }
-  refineSurfaces(scan, out.detection);
-  regularizeSurfaces(out.detection);
-  clock.finish(out.detection.message);
-  if (pastDeadline()) return timedOut("detection");
-
-  clock.start("hypotheses");
-  GridOptions go;
-  go.resolution = options.resolution;
-  out.grid = VoxelGrid::around(gridBox(scan, out.detection.surfaces), go);
-  HypothesisOptions ho;
-  ho.voxelSize = out.grid.voxelSize();
-  ho.seed = std::uint32_t(options.seed);
-  out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
-  clock.finish(std::to_string(out.hypotheses.candidates.size()) + " candidates");
-  if (pastDeadline()) return timedOut("hypotheses");
+  out.timings.push_back(
+      {"detect", found.detectSeconds + found.refineSeconds + found.regularizeSeconds});
+  out.timings.push_back({"hypotheses", found.hypothesisSeconds});
+  out.grid = std::move(found.grid);
+  out.hypotheses = std::move(found.hypotheses);
+  out.timeLimitHit = pastDeadline();
   if (options.memoryLimit > 0) {
     const double perVoxel = 3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
     const double need = perVoxel * double(out.grid.voxelCount());
@@ -201,7 +120,6 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   out.labels = labelVoxels(out.grid, scan, options.labels);
   clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
                " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
-  if (pastDeadline()) return timedOut("labelling");
 
   clock.start("description_sets");
   std::vector<CsgTree> candidates;
@@ -209,7 +127,6 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   for (const Candidate& c : out.hypotheses.candidates) candidates.push_back(c.tree);
   const std::vector<DescriptionSet> descriptions = describeAll(candidates, out.grid, out.labels);
   clock.finish(std::to_string(descriptions.size()) + " sets");
-  if (pastDeadline()) return timedOut("description sets");
 
   clock.start("optimisation");
   ConstructOptions co = options.construct;
@@ -227,7 +144,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   co.subtree.deadline = std::min(co.subtree.deadline, deadline);
   co.unionChoice.deadline = std::min(co.unionChoice.deadline, deadline);
   out.construction = constructCsg(candidates, descriptions, out.labels.inside, co, report);
-  out.timeLimitHit = pastDeadline();
+  out.timeLimitHit = out.timeLimitHit || pastDeadline();
   const ConstructStats& st = out.construction.stats;
   clock.finish(std::to_string(st.chosen) + " of " + std::to_string(st.unionCandidates) +
                " union candidates" + (st.provedOptimal ? ", proved optimal" : ""));

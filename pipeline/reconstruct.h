@@ -7,6 +7,7 @@
 /// description sets → Wu's two optimisations and the simplified tree.
 
 #include "optimize/csg_construction.h"
+#include "pipeline/detect_and_fit.h"
 #include "primitives/hypotheses.h"
 #include "core/point_cloud.h"
 #include "core/progress.h"
@@ -31,10 +32,12 @@ struct ReconstructOptions {
   LabelOptions labels;        ///< voxel labelling
   ConstructOptions construct; ///< the two optimisations (snapDistance 0: one voxel)
   /// Wall-clock seconds for the whole call (0: none). Detection past the
-  /// limit fails; the optimisations past it stop searching and keep the best
-  /// solution their local search found, so the tree is still valid but may
-  /// not be the proved optimum (stats.provedOptimal is then false). A limit
-  /// that is hit makes the result depend on the machine's speed.
+  /// limit fails (status TimedOut); after detection a limit never costs the
+  /// tree: labels and description sets run to their end, and the
+  /// optimisations stop searching and keep the best solution their local
+  /// search found, so the tree is still valid but may not be the proved
+  /// optimum (stats.provedOptimal is then false). A limit that is hit makes
+  /// the result depend on the machine's speed.
   double timeLimit = 0.0;
   /// Bytes the voxel stage may use (0: no limit). The description sets take
   /// about candidates × voxels / 8 bytes and the optimisation up to twice
@@ -73,17 +76,6 @@ struct Reconstruction {
   /// Voxel IoU of the tree's voxels against the inside labels.
   double voxelIou() const;
 };
-
-/// Called when a stage starts and when it ends (`done`), with a one-line
-/// summary of what it produced at the end.
-using StageCallback = std::function<void(std::string_view stage, bool done,
-                                         const std::string& summary)>;
-
-/// The box the voxel grid is laid over: aligned with the heaviest surface
-/// direction (plane normal or axis) and the heaviest one orthogonal to it,
-/// or the scan's minimal oriented box when the surfaces give no direction or
-/// the aligned box is over a quarter larger.
-OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces);
 
 /// Runs the whole reconstruction on an oriented scan. `progress`, when
 /// given, is called now and then inside the long stages (detection and the

@@ -3,16 +3,11 @@
 // each part must have a matching candidate (candidate_matching.h defines the
 // match: same type, axes within 2 degrees, visible geometry within 1 % of D).
 
-#include "primitives/bounding_box.h"
 #include "candidate_matching.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "part_list.h"
-#include "primitives/hypotheses.h"
-#include "primitives/regularization.h"
-#include "primitives/surface_detection.h"
-#include "primitives/surface_refinement.h"
-#include "voxel/voxel_grid.h"
+#include "pipeline/detect_and_fit.h"
 
 #include <gtest/gtest.h>
 
@@ -55,13 +50,11 @@ TEST_P(DetectionPipeline, EveryObservablePrimitiveHasACandidate) {
   const auto& [part, scanName] = GetParam();
   const CsgTree tree = readTreeJson(test::dataDir() / part / "tree.json");
   const Scan scan = readScan(test::dataDir() / part / scanName);
-  DetectionResult det = detectSurfaces(scan.cloud);
+  // The main job's own configuration (res 64, seed 1).
+  const SurfacesAndCandidates found = detectAndFit(scan.cloud);
+  const DetectionResult& det = found.detection;
   ASSERT_EQ(det.status, DetectionResult::Status::Ok) << det.message;
-  refineSurfaces(scan.cloud, det);
-  regularizeSurfaces(det);
-  HypothesisOptions ho;
-  ho.voxelSize = 2.0 * minimalOrientedBox(scan.cloud.points).halfSize.maxCoeff() / 64.0;
-  const HypothesisSet hyp = generateHypotheses(scan.cloud, det.surfaces, ho);
+  const HypothesisSet& hyp = found.hypotheses;
   EXPECT_LE(hyp.candidates.size(), 600u);
 
   const test::GroundTruth gt = test::makeGroundTruth(tree);

@@ -14,6 +14,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
+
 #include <cstdio>
 #include <string>
 
@@ -162,6 +165,24 @@ TEST(Reconstruction, TinyTimeLimitStopsCleanly) {
   EXPECT_TRUE(r.tree.empty());
   EXPECT_TRUE(r.timeLimitHit);
   EXPECT_NE(r.message.find("time limit"), std::string::npos) << r.message;
+}
+
+TEST(Reconstruction, LimitPastDetectionStillGivesTheTree) {
+  // The limit runs out while the labels are computed (the stage callback
+  // holds the run there past the deadline): the job must still end with a
+  // valid tree, as if the optimisation had been stopped (it failed "during
+  // labelling" before). Detection of this scan takes about 0.1 s.
+  const Scan scan = readScan(test::dataDir() / "plate_holes" / "scan.ply");
+  ReconstructOptions o;
+  o.timeLimit = 3.0;
+  const Reconstruction r =
+      reconstruct(scan.cloud, o, [&](std::string_view stage, bool done, const std::string&) {
+        if (stage == "labels" && !done) std::this_thread::sleep_for(std::chrono::milliseconds(3200));
+      });
+  ASSERT_EQ(r.status, Reconstruction::Status::Ok) << r.message;
+  EXPECT_TRUE(r.timeLimitHit);
+  EXPECT_FALSE(r.tree.empty());
+  EXPECT_GT(r.voxelIou(), 0.9);
 }
 
 TEST(Reconstruction, RejectsScansWithoutNormals) {

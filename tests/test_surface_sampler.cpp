@@ -175,5 +175,36 @@ TEST(SurfaceSampler, RejectsUnsampleableTrees) {
   EXPECT_THROW(sampleSurface(empty, {}), std::invalid_argument);
 }
 
+// A primitive thousands of times wider than the part (a nearly flat face
+// fitted as a cylinder of radius 4000 on a part 10 across, as on
+// InverseCSG part 148): sampling its whole surface almost never hits the
+// part, and the sampler used to give up with "no boundary to sample".
+TEST(SurfaceSampler, PrimitivesMuchWiderThanThePartAreSampledNearIt) {
+  const double r = 4000.0;
+  const CsgTree tree = CsgTree::subtract(
+      {CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(5, 5, 5)}),
+       CsgTree::leaf(Cylinder{Vec3(3.0 - r, 0, 0), Vec3::UnitZ(), r, 20.0}),
+       CsgTree::leaf(Sphere{Vec3(0, 0, -5.0 - r), r + 1.0})});
+  SampleOptions o;
+  o.points = 20000;
+  const SurfaceSample s = sampleSurface(tree, o);
+  ASSERT_EQ(s.cloud.size(), o.points);
+  const double d = tree.bounds().diagonal();
+  std::size_t onCylinder = 0, onSphere = 0;
+  for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+    EXPECT_LT(std::abs(tree.value(s.cloud.points[i])), 1e-9 * d);
+    onCylinder += s.source[i] == 1;
+    onSphere += s.source[i] == 2;
+  }
+  // Still uniform: each face gets its share of the boundary's area. The
+  // solid is about x in [3, 5], z in [-4, 5]: the cylinder's face about
+  // 10 x 9, the sphere's 2 x 10, the whole boundary about 2 x 90 + 2 x 20 +
+  // 2 x 18.
+  const double cylinderShare = 90.0 / 256.0, sphereShare = 20.0 / 256.0;
+  EXPECT_NEAR(double(onCylinder) / double(o.points), cylinderShare, 0.02);
+  EXPECT_NEAR(double(onSphere) / double(o.points), sphereShare, 0.02);
+  EXPECT_NEAR(s.surfaceArea, 256.0, 256.0 * 0.05);
+}
+
 }  // namespace
 }  // namespace csgvox

@@ -1,0 +1,90 @@
+#include "io/output_set.h"
+
+#include "io/errors.h"
+
+#include <algorithm>
+#include <atomic>
+#include <system_error>
+#include <unistd.h>
+
+namespace csgvox {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string uniqueSuffix() {
+  static std::atomic<unsigned> counter{0};
+  return std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+
+}  // namespace
+
+OutputSet::OutputSet(fs::path folder, std::vector<std::string> names,
+                     std::span<const fs::path> inputs)
+    : folder_(std::move(folder)), names_(std::move(names)) {
+  std::error_code ec;
+  for (const std::string& name : names_) {
+    const fs::path target = folder_ / name;
+    for (const fs::path& input : inputs) {
+      if (fs::exists(target, ec) && fs::equivalent(target, input, ec)) {
+        throw IoError(target.string() + ": is an input of this command; refusing to overwrite it");
+      }
+    }
+  }
+  const fs::file_status st = fs::status(folder_, ec);
+  if (fs::exists(st) && !fs::is_directory(st)) {
+    throw IoError(folder_.string() + ": exists and is not a directory");
+  }
+  freshFolder_ = !fs::exists(st);
+  if (freshFolder_) {
+    fs::path target = fs::absolute(folder_, ec).lexically_normal();
+    if (target.filename().empty()) target = target.parent_path();  // "out/"
+    fs::create_directories(target.parent_path(), ec);
+    staging_ = target.parent_path() /
+               ("." + target.filename().string() + ".partial-" + uniqueSuffix());
+  } else {
+    staging_ = folder_ / (".csgvox-partial-" + uniqueSuffix());
+  }
+  if (!fs::create_directory(staging_, ec) || ec) {
+    throw IoError(folder_.string() + ": cannot create the output directory" +
+                  (ec ? " (" + ec.message() + ")" : std::string()));
+  }
+}
+
+OutputSet::~OutputSet() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+}
+
+fs::path OutputSet::path(const std::string& name) const { return staging_ / name; }
+
+void OutputSet::commit() {
+  std::error_code ec;
+  for (const std::string& name : names_) {
+    if (!fs::is_regular_file(staging_ / name, ec)) {
+      throw IoError((folder_ / name).string() + ": was not written");
+    }
+  }
+  if (freshFolder_) {
+    // The whole set appears in one rename, unless the folder appeared
+    // meanwhile (another run): then file by file as below.
+    fs::rename(staging_, folder_, ec);
+    if (!ec) {
+      committed_ = true;
+      return;
+    }
+    ec.clear();
+  }
+  for (const std::string& name : names_) {
+    fs::rename(staging_ / name, folder_ / name, ec);
+    if (ec) {
+      throw IoError((folder_ / name).string() + ": cannot be written (" + ec.message() + ")");
+    }
+  }
+  committed_ = true;
+  fs::remove_all(staging_, ec);
+}
+
+}  // namespace csgvox

@@ -1,0 +1,142 @@
+#include "pipeline/detect_and_fit.h"
+
+#include "primitives/bounding_box.h"
+#include "primitives/surface_refinement.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <stdexcept>
+
+namespace csgvox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+// The frame of the voxel grid. Voxels aligned with the part's faces see
+// them without staircase aliasing, but the minimal oriented box of a noisy
+// scan comes out tilted by a fraction of a degree (its volume is flat near
+// the minimum), and an L-shaped part's can even turn diagonal. So the frame
+// comes from the detected surfaces: the direction (plane normal or axis)
+// with most inliers, then the heaviest direction orthogonal to it within
+// two degrees. The minimal box is kept when no surface gives a direction or
+// when the aligned box is more than a quarter larger.
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces) {
+  const OrientedBox minimal = minimalOrientedBox(scan.points);
+  struct Direction {
+    Vec3 dir;
+    double weight;
+  };
+  std::vector<Direction> dirs;
+  const double cosParallel = std::cos(2.0 * std::numbers::pi / 180.0);
+  for (const Surface& s : surfaces) {
+    Vec3 d;
+    if (const auto* p = s.as<PlaneSurface>()) {
+      d = p->normal;
+    } else if (const auto* c = s.as<CylinderSurface>()) {
+      d = c->axisDir;
+    } else if (const auto* c = s.as<ConeSurface>()) {
+      d = c->axisDir;
+    } else if (const auto* t = s.as<TorusSurface>()) {
+      d = t->axisDir;
+    } else {
+      continue;
+    }
+    if (!(d.norm() > 0.0)) continue;
+    d.normalize();
+    const double w = double(s.inliers.size());
+    auto same = std::find_if(dirs.begin(), dirs.end(), [&](const Direction& o) {
+      return std::abs(o.dir.dot(d)) >= cosParallel;
+    });
+    if (same != dirs.end()) {
+      same->weight += w;
+    } else {
+      dirs.push_back({d, w});
+    }
+  }
+  if (dirs.empty()) return minimal;
+  std::stable_sort(dirs.begin(), dirs.end(),
+                   [](const Direction& a, const Direction& b) { return a.weight > b.weight; });
+  const Vec3 a1 = dirs.front().dir;
+  const double sinOrthogonal = std::sin(2.0 * std::numbers::pi / 180.0);
+  Vec3 a2 = Vec3::Zero();
+  for (const Direction& d : dirs) {
+    if (std::abs(d.dir.dot(a1)) <= sinOrthogonal) {
+      a2 = d.dir;
+      break;
+    }
+  }
+  if (a2 == Vec3::Zero()) {
+    // Only one direction: the minimal box's axis most orthogonal to it.
+    double best = 2.0;
+    for (int k = 0; k < 3; ++k) {
+      const double c = std::abs(minimal.axes.col(k).dot(a1));
+      if (c < best) best = c, a2 = minimal.axes.col(k);
+    }
+  }
+  a2 = (a2 - a2.dot(a1) * a1).normalized();
+  Mat3 frame;
+  frame.col(0) = a1;
+  frame.col(1) = a2;
+  frame.col(2) = a1.cross(a2);
+  const OrientedBox aligned = boxAlong(scan.points, frame);
+  const double volume = aligned.halfSize.prod(), minimalVolume = minimal.halfSize.prod();
+  return volume <= 1.25 * minimalVolume ? aligned : minimal;
+}
+
+SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOptions& options,
+                                   const StageCallback& onStage, const ProgressCallback& progress) {
+  if (scan.empty()) throw std::invalid_argument("the scan has no points");
+  if (!scan.hasNormals()) throw std::invalid_argument("the scan has no normals");
+  SurfacesAndCandidates out;
+  if (onStage) onStage("detect", false, {});
+  Clock::time_point start = Clock::now();
+  DetectOptions dopt = options.detect;
+  dopt.seed = options.seed;
+  out.detection = detectSurfaces(scan, dopt, progress);
+  out.detectSeconds = secondsSince(start);
+  if (!out.detection.ok()) return out;
+  DetectionResult& det = out.detection;
+  if (det.noise > options.maxNoise * det.diagonal) {
+    char buf[256];
+    std::snprintf(buf, sizeof(buf),
+                  "the points do not lie on surfaces: their estimated noise is %.3g %% of the "
+                  "diagonal (at most %.3g %% is accepted); not the scan of a solid",
+                  100.0 * det.noise / det.diagonal, 100.0 * options.maxNoise);
+    det.status = DetectionResult::Status::NoSurfaces;
+    det.message = buf;
+    return out;
+  }
+  start = Clock::now();
+  refineSurfaces(scan, out.detection);
+  out.refineSeconds = secondsSince(start);
+  start = Clock::now();
+  out.regularization = regularizeSurfaces(out.detection);
+  out.regularizeSeconds = secondsSince(start);
+  if (onStage) onStage("detect", true, out.detection.message);
+
+  if (onStage) onStage("hypotheses", false, {});
+  start = Clock::now();
+  GridOptions go;
+  go.resolution = options.resolution;
+  out.grid = VoxelGrid::around(gridBox(scan, out.detection.surfaces), go);
+  HypothesisOptions ho = options.hypotheses;
+  ho.voxelSize = out.grid.voxelSize();
+  ho.seed = std::uint32_t(options.seed);
+  out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
+  out.hypothesisSeconds = secondsSince(start);
+  if (onStage) {
+    onStage("hypotheses", true, std::to_string(out.hypotheses.candidates.size()) + " candidates");
+  }
+  return out;
+}
+
+}  // namespace csgvox

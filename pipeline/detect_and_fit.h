@@ -1,0 +1,73 @@
+#pragma once
+/// The first half of the main job, shared by every caller (the main job,
+/// `csgvox detect`, the benchmarks and the tests): surfaces detected,
+/// refined and regularised, the voxel grid's frame, and the bounded
+/// primitive hypotheses fitted to that grid's voxel size.
+
+#include "core/point_cloud.h"
+#include "core/progress.h"
+#include "primitives/hypotheses.h"
+#include "primitives/regularization.h"
+#include "primitives/surface_detection.h"
+#include "voxel/voxel_grid.h"
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace csgvox {
+
+/// Called when a stage starts and when it ends (`done`), with a one-line
+/// summary of what it produced at the end.
+using StageCallback = std::function<void(std::string_view stage, bool done,
+                                         const std::string& summary)>;
+
+/// Options of detectAndFit().
+struct DetectAndFitOptions {
+  int resolution = 64;          ///< voxels along the longest side of the grid box (8..1024)
+  std::uint64_t seed = 1;       ///< seeds detection and the hypotheses' box search
+  DetectOptions detect;         ///< surface detection (its seed is replaced by `seed`)
+  HypothesisOptions hypotheses; ///< hypotheses (voxelSize and seed are set from the grid and `seed`)
+  /// A scan whose estimated position noise is larger is refused as not the
+  /// scan of a solid's surfaces (scattered points), fraction of D. The
+  /// bundled noisy scans have 0.005; uniform random points in a cube 0.06.
+  double maxNoise = 0.02;
+};
+
+/// Surfaces and candidates of a scan, as the main job computes them.
+struct SurfacesAndCandidates {
+  DetectionResult detection;             ///< refined and regularised surfaces (or why none)
+  RegularizationReport regularization;   ///< what the regularisation changed
+  VoxelGrid grid;                        ///< the main job's voxel grid (its size: the fit tolerance)
+  HypothesisSet hypotheses;              ///< bounded candidates (empty unless detection.ok())
+  double detectSeconds = 0.0;            ///< RANSAC
+  double refineSeconds = 0.0;            ///< Ceres refinement
+  double regularizeSeconds = 0.0;        ///< regularisation
+  double hypothesisSeconds = 0.0;        ///< grid frame and hypotheses
+
+  bool ok() const { return detection.ok(); }
+};
+
+/// The box the voxel grid is laid over: aligned with the heaviest surface
+/// direction (plane normal or axis) and the heaviest one orthogonal to it,
+/// or the scan's minimal oriented box when the surfaces give no direction or
+/// the aligned box is over a quarter larger.
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces);
+
+/// Detects, refines and regularises the scan's surfaces, lays the voxel
+/// grid over gridBox() and builds the bounded hypotheses with the grid's
+/// voxel size as their fit tolerance. Stages "detect" and "hypotheses" are
+/// reported to `onStage`. `progress` is passed to detection: returning
+/// false cancels it (detection.status is then Cancelled and nothing after
+/// detection runs). When detection finds nothing usable, or the points are
+/// too scattered for surfaces to explain them (estimated noise above
+/// maxNoise), the result carries status NoSurfaces and a one-line message,
+/// and no grid or hypotheses.
+/// @throw std::invalid_argument when the scan is empty or has no normals.
+SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOptions& options = {},
+                                   const StageCallback& onStage = {},
+                                   const ProgressCallback& progress = {});
+
+}  // namespace csgvox
