@@ -1,27 +1,18 @@
 // Phase 1 (Eq. 4) and phase 2 (Eq. 6) solvers against brute-force
 // enumeration on random instances.
 
-#include "optimize/subtree_selection.h"
-#include "optimize/union_selection.h"
-
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "optimize/subtree_selection.h"
+#include "optimize/union_selection.h"
+#include "random_voxel_sets.h"
+
 namespace csgvox {
 namespace {
 
-// Random blob-like sets: unions of random intervals, so that sets overlap in
-// structured ways as primitives do.
-VoxelSet randomSet(std::size_t bits, std::mt19937_64& rng, int intervals, std::size_t maxLen) {
-  VoxelSet s(bits);
-  std::uniform_int_distribution<std::size_t> start(0, bits - 1), len(1, maxLen);
-  for (int k = 0; k < intervals; ++k) {
-    const std::size_t a = start(rng), l = len(rng);
-    for (std::size_t i = a; i < std::min(bits, a + l); ++i) s.set(i);
-  }
-  return s;
-}
+using test::randomSet;
 
 double bruteForceSubtree(const VoxelSet& root, const VoxelSet& inside,
                          const std::vector<const VoxelSet*>& nb, double alpha) {
