@@ -54,7 +54,8 @@ class SelectionProblem {
   /// `channels` (one or two, all of the universe's size) are the subsets of
   /// the universe the energy counts the union in. An item is worth adding
   /// only when it adds voxels of channel `boundChannel`, and the bound is
-  /// taken over that channel.
+  /// taken over that channel: the objective must never fall by adding an
+  /// item that adds no voxel of that channel.
   SelectionProblem(std::vector<VoxelSet> channels, std::size_t boundChannel);
 
   /// Adds an item with id `id` unless an item with the same set exists;
@@ -65,10 +66,15 @@ class SelectionProblem {
   /// early and gets strong bounds when the most promising items come first.
   void sortByDescending(std::span<const double> score);
 
+  /// Voxels in the universe.
   std::size_t universe() const { return channels_.front().size(); }
+  /// Number of channels (1 or 2).
   std::size_t channelCount() const { return channels_.size(); }
+  /// Channel k's voxels.
   const VoxelSet& channel(std::size_t k) const { return channels_[k]; }
+  /// The channel that decides whether an item is worth adding and bounds the search.
   std::size_t boundChannel() const { return boundChannel_; }
+  /// The items, in search order.
   const std::vector<SelectionItem>& items() const { return items_; }
   /// The union's count in each channel.
   ChannelCounts counts(const VoxelSet& united) const;
