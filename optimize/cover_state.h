@@ -4,12 +4,12 @@
 /// exactly once, so that the effect of adding or removing one set is a single
 /// AND/AND-NOT plus popcount.
 
-#include "voxel/voxel_set.h"
-
 #include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
+
+#include "voxel/voxel_set.h"
 
 namespace csgvox {
 
@@ -69,8 +69,14 @@ class CoverState {
       const std::size_t i = w * 64 + std::size_t(std::countr_zero(bits));
       const int c = int(counts_[i]) + delta;
       counts_[i] = std::uint32_t(c);
-      if (c > 0) covered_.set(i); else covered_.reset(i);
-      if (c == 1) once_.set(i); else once_.reset(i);
+      if (c > 0)
+        covered_.set(i);
+      else
+        covered_.reset(i);
+      if (c == 1)
+        once_.set(i);
+      else
+        once_.reset(i);
     }
   }
 

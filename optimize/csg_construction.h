@@ -2,26 +2,28 @@
 /// Wu et al. §4 end to end on voxels: roots, phase-1 subtrees, pruning,
 /// phase-2 union, and the simplified CSG tree.
 
-#include "optimize/subtree_selection.h"
-#include "optimize/union_selection.h"
-#include "core/csg_tree.h"
-#include "core/progress.h"
-#include "voxel/description_sets.h"
-
-#include <functional>
 #include <span>
 #include <vector>
 
-namespace csgvox {
+#include "core/csg_tree.h"
+#include "core/progress.h"
+#include "optimize/skin_cuts.h"
+#include "optimize/subtree_selection.h"
+#include "optimize/union_selection.h"
+#include "voxel/description_sets.h"
 
-/// True when the scan has a point near p.
-using ScannedAt = std::function<bool(const Vec3& p)>;
+namespace csgvox {
 
 /// Options of constructCsg.
 struct ConstructOptions {
-  SubtreeOptions subtree;     ///< phase 1 (alpha, solver budget)
-  UnionOptions unionChoice;   ///< phase 2 (beta, solver budget)
-  bool simplify = true;       ///< drop no-op operations and lift shared subtractions
+  SubtreeOptions subtree;    ///< phase 1 (alpha, solver budget; its seed is replaced by `seed`)
+  UnionOptions unionChoice;  ///< phase 2 (beta, solver budget; its seed is replaced by `seed`)
+  /// The run's seed: seeds the local searches that give both phases' branch
+  /// and bound their first incumbent (it changes a tree only where a node
+  /// budget or a deadline stops branch and bound). Same seed, same tree, at
+  /// any thread count.
+  std::uint64_t seed = 1;
+  bool simplify = true;  ///< drop no-op operations and lift shared subtractions
   /// After phase 2, a local search over the whole union that drops actions
   /// and members while (primitives × minFeatureVoxels + voxels disagreeing
   /// with the labels) falls; undoes a root that cut too much and the members
@@ -43,19 +45,19 @@ struct ConstructOptions {
 
 /// Counts reported by constructCsg.
 struct ConstructStats {
-  std::size_t candidates = 0;      ///< primitive candidates given
-  std::size_t usableRoots = 0;     ///< RPr: no outside voxels, inside the grid
-  std::size_t truncationRoots = 0; ///< RPr': to be truncated (after removing duplicates of RPr)
-  std::size_t subtrees = 0;        ///< subtrees built in phase 1 with no outside voxels left
-  std::size_t unionCandidates = 0; ///< M: candidates of phase 2
-  std::size_t chosen = 0;          ///< candidates in the union
-  bool provedOptimal = true;       ///< every solve finished its branch and bound
+  std::size_t candidates = 0;       ///< primitive candidates given
+  std::size_t usableRoots = 0;      ///< RPr: no outside voxels, inside the grid
+  std::size_t truncationRoots = 0;  ///< RPr': to be truncated (after removing duplicates of RPr)
+  std::size_t subtrees = 0;         ///< subtrees built in phase 1 with no outside voxels left
+  std::size_t unionCandidates = 0;  ///< M: candidates of phase 2
+  std::size_t chosen = 0;           ///< candidates in the union
+  bool provedOptimal = true;        ///< every solve finished its branch and bound
 };
 
 /// Result of constructCsg.
 struct Construction {
-  CsgTree tree;      ///< the union of the chosen candidates (empty when none)
-  VoxelSet voxels;   ///< the tree's voxels as computed from the description sets
+  CsgTree tree;     ///< the union of the chosen candidates (empty when none)
+  VoxelSet voxels;  ///< the tree's voxels as computed from the description sets
   ConstructStats stats;
 };
 

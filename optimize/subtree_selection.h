@@ -4,11 +4,11 @@
 /// x that minimise Eq. 4:
 ///   E(x) = (1/L) Σ x_i − α |V+(root) ∩ V(sub)| / |V+(root) ∪ V−(sub)|.
 
-#include "voxel/voxel_set.h"
-
 #include <chrono>
 #include <cstdint>
 #include <vector>
+
+#include "voxel/voxel_set.h"
 
 namespace csgvox {
 
@@ -21,12 +21,17 @@ struct SubtreeAction {
 
 /// Options of selectSubtree.
 struct SubtreeOptions {
-  double alpha = 0.9;                  ///< weight of the fit term of Eq. 4
+  double alpha = 0.9;  ///< weight of the fit term of Eq. 4
   /// Cost of one action. 0: Wu's 1/L, which depends on how many neighbours
   /// the root has. > 0: this many voxels divided by |V+(root)|, so an action
   /// pays off when it corrects about this many voxels, whatever L is.
   double minFeatureVoxels = 8.0;
-  std::uint64_t nodeBudget = 20'000;  ///< branch-and-bound nodes before falling back to local search
+  std::uint64_t nodeBudget =
+      20'000;  ///< branch-and-bound nodes before falling back to local search
+  /// Seeds the local search that gives branch and bound its first incumbent
+  /// (its result matters only when the budget or the deadline stops branch
+  /// and bound). The run's seed; 1 is the default run.
+  std::uint64_t seed = 1;
   /// Wall clock at which branch and bound stops and keeps its best solution
   /// so far (provedOptimal is then false). Default: never.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();

@@ -3,21 +3,25 @@
 /// subtrees without outside voxels) minimising Eq. 6:
 ///   E(z) = (1/M) Σ z_i − β |V+(P) ∩ ∪ V(C_i)| / |V+(P)|.
 
-#include "voxel/voxel_set.h"
-
 #include <chrono>
 #include <cstdint>
 #include <vector>
+
+#include "voxel/voxel_set.h"
 
 namespace csgvox {
 
 /// Options of selectUnion.
 struct UnionOptions {
-  double beta = 0.9;                     ///< weight of the coverage term of Eq. 6
+  double beta = 0.9;  ///< weight of the coverage term of Eq. 6
   /// Cost of one candidate. 0: Wu's 1/M. > 0: this many voxels divided by
   /// |V+(P)|, so a candidate pays off when it adds about this many voxels.
   double minFeatureVoxels = 8.0;
   std::uint64_t nodeBudget = 50'000;  ///< branch-and-bound nodes before settling for local search
+  /// Seeds the local search that gives branch and bound its first incumbent
+  /// (its result matters only when the budget or the deadline stops branch
+  /// and bound). The run's seed; 1 is the default run.
+  std::uint64_t seed = 1;
   /// Wall clock at which branch and bound stops and keeps its best solution
   /// so far (provedOptimal is then false). Default: never.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();

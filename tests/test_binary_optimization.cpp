@@ -1,27 +1,19 @@
 // Phase 1 (Eq. 4) and phase 2 (Eq. 6) solvers against brute-force
 // enumeration on random instances.
 
-#include "optimize/subtree_selection.h"
-#include "optimize/union_selection.h"
-
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <random>
+
+#include "optimize/subtree_selection.h"
+#include "optimize/union_selection.h"
+#include "random_voxel_sets.h"
 
 namespace csgvox {
 namespace {
 
-// Random blob-like sets: unions of random intervals, so that sets overlap in
-// structured ways as primitives do.
-VoxelSet randomSet(std::size_t bits, std::mt19937_64& rng, int intervals, std::size_t maxLen) {
-  VoxelSet s(bits);
-  std::uniform_int_distribution<std::size_t> start(0, bits - 1), len(1, maxLen);
-  for (int k = 0; k < intervals; ++k) {
-    const std::size_t a = start(rng), l = len(rng);
-    for (std::size_t i = a; i < std::min(bits, a + l); ++i) s.set(i);
-  }
-  return s;
-}
+using test::randomSet;
 
 double bruteForceSubtree(const VoxelSet& root, const VoxelSet& inside,
                          const std::vector<const VoxelSet*>& nb, double alpha) {
@@ -77,6 +69,46 @@ TEST(SubtreeSelection, MatchesBruteForceOnRandomInstances) {
   EXPECT_EQ(checked, 120);
 }
 
+// The production cost (minFeatureVoxels > 0): an action costs
+// minFeatureVoxels / |V+(root)|, and actions that can never pay for
+// themselves are dropped before the search. Still the exact optimum.
+TEST(SubtreeSelection, MatchesBruteForceWithTheMinFeatureCost) {
+  std::mt19937_64 rng(13);
+  int truncated = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t bits = 250 + std::size_t(trial) * 5;
+    const VoxelSet inside = randomSet(bits, rng, 4, bits / 3);
+    const VoxelSet root = randomSet(bits, rng, 2, bits / 2);
+    const int n = 1 + trial % 7;
+    std::vector<VoxelSet> sets;
+    for (int i = 0; i < n; ++i) sets.push_back(randomSet(bits, rng, 2, bits / 4));
+    std::vector<const VoxelSet*> nb;
+    std::vector<std::uint32_t> ids;
+    for (int i = 0; i < n; ++i)
+      nb.push_back(&sets[std::size_t(i)]), ids.push_back(std::uint32_t(i));
+    SubtreeOptions o;
+    o.minFeatureVoxels = 6.0;
+    const SubtreeResult r = selectSubtree(root, inside, nb, ids, o);
+    const double plusRoot = double(VoxelSet::countAnd(root, inside));
+    const double invL = o.minFeatureVoxels / std::max(1.0, plusRoot);
+    double best = 1e300;
+    for (std::uint32_t mask = 0; mask < (1u << (2 * n)); ++mask) {
+      VoxelSet sub = root;
+      for (int i = 0; i < n; ++i) {
+        if (mask >> (2 * i) & 1) sub &= sets[std::size_t(i)];
+        if (mask >> (2 * i + 1) & 1) sub.subtract(sets[std::size_t(i)]);
+      }
+      const double num = double(VoxelSet::countAnd(sub, inside));
+      const double den = plusRoot + double(VoxelSet::countAndNot(sub, inside));
+      best = std::min(best, std::popcount(mask) * invL - o.alpha * (den > 0 ? num / den : 0.0));
+    }
+    EXPECT_TRUE(r.provedOptimal);
+    EXPECT_NEAR(r.energy, best, 1e-12) << "trial " << trial;
+    truncated += r.actions.empty() ? 0 : 1;
+  }
+  EXPECT_GE(truncated, 10);  // the instances are not all left alone
+}
+
 TEST(SubtreeSelection, TruncatesABoxToTheInsideExactly) {
   // Root covers [0, 100); inside is [0, 60); neighbour A = [0, 60) (intersect
   // with it), B = [60, 100) (subtract it), C unrelated.
@@ -126,6 +158,38 @@ TEST(UnionSelection, MatchesBruteForceOnRandomInstances) {
       EXPECT_NEAR(unionEnergy(inside, cands, z, beta), r.energy, 1e-12);
     }
   }
+}
+
+TEST(UnionSelection, MatchesBruteForceWithTheMinFeatureCost) {
+  std::mt19937_64 rng(19);
+  int several = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t bits = 400 + std::size_t(trial) * 5;
+    const VoxelSet inside = randomSet(bits, rng, 5, bits / 4);
+    const int m = 2 + trial % 13;
+    std::vector<VoxelSet> sets;
+    for (int i = 0; i < m; ++i) sets.push_back(randomSet(bits, rng, 1, bits / 5) & inside);
+    std::vector<const VoxelSet*> cands;
+    for (const VoxelSet& s : sets) cands.push_back(&s);
+    UnionOptions o;
+    o.minFeatureVoxels = 20.0;
+    const UnionResult r = selectUnion(inside, cands, o);
+    const double total = double(inside.count());
+    double best = 1e300;
+    for (std::uint32_t mask = 0; mask < (1u << m); ++mask) {
+      VoxelSet u(bits);
+      for (int i = 0; i < m; ++i) {
+        if (mask >> i & 1) u |= sets[std::size_t(i)];
+      }
+      best = std::min(best, (std::popcount(mask) * o.minFeatureVoxels -
+                             o.beta * double(VoxelSet::countAnd(u, inside))) /
+                                total);
+    }
+    EXPECT_TRUE(r.provedOptimal);
+    EXPECT_NEAR(r.energy, best, 1e-12) << "trial " << trial;
+    several += r.chosen.size() > 1 ? 1 : 0;
+  }
+  EXPECT_GE(several, 10);  // the optimum is not a single candidate throughout
 }
 
 TEST(UnionSelection, ScalesToHundredsOfCandidates) {
