@@ -130,6 +130,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
 
   clock.start("optimisation");
   ConstructOptions co = options.construct;
+  co.seed = options.seed;
   if (co.snapDistance == 0.0) co.snapDistance = out.grid.voxelSize();
   // Scan points decide whether a sub-voxel skin is a real wall.
   const NearestNeighbors scanIndex(scan.points);
