@@ -1,10 +1,8 @@
 // Tree evaluations per second on 100k points for each bundled tree
-// (data/*/tree.json), single thread: the per-point value() path against the
-// batched values() path, on the same points. Usage: bench_tree_eval [data dir]
-
-#include "bench/bench_common.h"
-#include "core/csg_tree.h"
-#include "io/tree_json.h"
+// (data/*/tree.json), single thread, on the same points: evaluate().f (the
+// gradient path, through the set operations' virtual calls at every node),
+// the per-point value() path and the batched values() path.
+// Usage: bench_tree_eval [data dir]
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +11,10 @@
 #include <random>
 #include <string>
 #include <vector>
+
+#include "bench/bench_common.h"
+#include "core/csg_tree.h"
+#include "io/tree_json.h"
 
 namespace {
 
@@ -56,13 +58,20 @@ int main(int argc, char** argv) {
     if (fs::exists(entry.path() / "tree.json")) trees.push_back(entry.path() / "tree.json");
   }
   std::sort(trees.begin(), trees.end());
-  std::printf("%-18s %6s %14s %14s %9s\n", "tree", "leaves", "value() /s", "values() /s",
-              "speed-up");
+  std::printf("%-18s %6s %14s %14s %14s %9s\n", "tree", "leaves", "evaluate() /s", "value() /s",
+              "values() /s", "speed-up");
   for (const fs::path& path : trees) {
     const CsgTree tree = readTreeJson(path);
     const std::vector<Vec3> points = samplePoints(tree);
     std::vector<double> out(points.size());
-    double perPointSum = 0.0, batchedSum = 0.0;
+    double gradientSum = 0.0, perPointSum = 0.0, batchedSum = 0.0;
+    const double gradient = rate(
+        [&] {
+          double s = 0.0;
+          for (std::size_t i = 0; i < points.size(); ++i) s += tree.evaluate(points[i]).f;
+          return s;
+        },
+        gradientSum);
     const double perPoint = rate(
         [&] {
           double s = 0.0;
@@ -70,10 +79,6 @@ int main(int argc, char** argv) {
           return s;
         },
         perPointSum);
-#ifdef CSGVOX_BENCH_PER_POINT_ONLY
-    const double batched = 0.0;
-    batchedSum = perPointSum;
-#else
     const double batched = rate(
         [&] {
           tree.values(points, out);
@@ -82,14 +87,13 @@ int main(int argc, char** argv) {
           return s;
         },
         batchedSum);
-#endif
-    if (perPointSum != batchedSum) {
-      std::fprintf(stderr, "%s: the two paths disagree\n", path.string().c_str());
+    if (perPointSum != batchedSum || gradientSum != perPointSum) {
+      std::fprintf(stderr, "%s: the paths disagree\n", path.string().c_str());
       return 1;
     }
-    std::printf("%-18s %6zu %14.1f %14.1f %8.1fx\n",
-                path.parent_path().filename().string().c_str(), tree.primitiveCount(), perPoint,
-                batched, batched / perPoint);
+    std::printf("%-18s %6zu %14.1f %14.1f %14.1f %8.1fx\n",
+                path.parent_path().filename().string().c_str(), tree.primitiveCount(), gradient,
+                perPoint, batched, batched / gradient);
   }
   std::printf("(evaluations of the tree at %zu points per second, one thread)\n", kPoints);
   return 0;

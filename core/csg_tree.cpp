@@ -1,10 +1,10 @@
 #include "core/csg_tree.h"
 
-#include "core/tree_program.h"
-
 #include <algorithm>
 #include <functional>
 #include <stdexcept>
+
+#include "core/tree_program.h"
 
 namespace csgvox {
 namespace {
@@ -71,8 +71,10 @@ FieldValue evaluateNode(const Node& node, const Vec3& p, const SetOperations& op
 template <class Ops>
 double valueOf(const Node& node, const Vec3& p) {
   switch (node.kind) {
-    case NodeKind::Primitive: return node.primitive.value(p);
-    case NodeKind::Complement: return -valueOf<Ops>(*node.children.front(), p);
+    case NodeKind::Primitive:
+      return node.primitive.value(p);
+    case NodeKind::Complement:
+      return -valueOf<Ops>(*node.children.front(), p);
     case NodeKind::Union: {
       double acc = valueOf<Ops>(*node.children.front(), p);
       for (std::size_t i = 1; i < node.children.size(); ++i) {
@@ -127,9 +129,12 @@ NodePtr replaced(const NodePtr& node, const Node* target, const NodePtr& replace
 
 Aabb boundsOf(const Node& node) {
   switch (node.kind) {
-    case NodeKind::Primitive: return node.primitive.bounds();
-    case NodeKind::Complement: return Aabb::everything();
-    case NodeKind::Difference: return boundsOf(*node.children.front());
+    case NodeKind::Primitive:
+      return node.primitive.bounds();
+    case NodeKind::Complement:
+      return Aabb::everything();
+    case NodeKind::Difference:
+      return boundsOf(*node.children.front());
     case NodeKind::Union: {
       Aabb b;
       for (const NodePtr& c : node.children) b.extend(boundsOf(*c));
@@ -248,8 +253,10 @@ std::vector<const Node*> CsgTree::leaves() const {
 double CsgTree::value(const Vec3& p, const SetOperations& ops) const {
   if (!root_) return -std::numeric_limits<double>::infinity();
   switch (ops.kind()) {
-    case SetOperationKind::MinMax: return valueOf<MinMaxValues>(*root_, p);
-    case SetOperationKind::RFunction: return valueOf<RFunctionValues>(*root_, p);
+    case SetOperationKind::MinMax:
+      return valueOf<MinMaxValues>(*root_, p);
+    case SetOperationKind::RFunction:
+      return valueOf<RFunctionValues>(*root_, p);
   }
   return evaluate(p, ops).f;
 }
@@ -315,11 +322,16 @@ CsgTree CsgTree::replaceSubtree(const Node* target, const CsgTree& replacement) 
 
 std::string_view nodeKindName(NodeKind kind) {
   switch (kind) {
-    case NodeKind::Primitive: return "primitive";
-    case NodeKind::Union: return "union";
-    case NodeKind::Intersection: return "intersection";
-    case NodeKind::Difference: return "difference";
-    case NodeKind::Complement: return "complement";
+    case NodeKind::Primitive:
+      return "primitive";
+    case NodeKind::Union:
+      return "union";
+    case NodeKind::Intersection:
+      return "intersection";
+    case NodeKind::Difference:
+      return "difference";
+    case NodeKind::Complement:
+      return "complement";
   }
   return "unknown";
 }

@@ -3,15 +3,15 @@
 /// are union, intersection, difference (first child minus the others) and
 /// complement. Edits return new trees that share unchanged subtrees.
 
-#include "core/primitive.h"
-#include "core/set_operations.h"
-
 #include <cstddef>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "core/primitive.h"
+#include "core/set_operations.h"
 
 namespace csgvox {
 

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <stdexcept>
 
@@ -23,9 +23,9 @@ struct Sd2 {
 
 // Cylindrical coordinates of p around an axis through `center`.
 struct Meridian {
-  double rho;    // distance from the axis
-  double z;      // signed coordinate along the axis
-  Vec3 radial;   // unit radial direction (arbitrary perpendicular on the axis)
+  double rho;   // distance from the axis
+  double z;     // signed coordinate along the axis
+  Vec3 radial;  // unit radial direction (arbitrary perpendicular on the axis)
 };
 
 // The radial direction is only computed with kGradient.
@@ -161,9 +161,9 @@ double coneValue(const Cone& s, const Vec3& p, Vec3* g) {
   const double h = 0.5 * s.height;
   // Counter-clockwise trapezoid in (rho, z); the axis edge is not a boundary.
   const std::array<Segment2, 3> segs = {{
-      {0.0, -h, s.radiusBottom, -h},             // bottom cap
-      {s.radiusBottom, -h, s.radiusTop, h},      // lateral surface
-      {s.radiusTop, h, 0.0, h},                  // top cap
+      {0.0, -h, s.radiusBottom, -h},         // bottom cap
+      {s.radiusBottom, -h, s.radiusTop, h},  // lateral surface
+      {s.radiusTop, h, 0.0, h},              // top cap
   }};
   const Sd2 sd = convexSd2(m.rho, m.z, segs.data(), static_cast<int>(segs.size()));
   return fromMeridian<kGradient>(sd, m, s.axis, g);
@@ -193,12 +193,18 @@ double torusValue(const Torus& s, const Vec3& p, Vec3* g) {
 template <bool kGradient>
 double shapeValue(const Primitive& prim, const Vec3& p, Vec3* g) {
   switch (prim.type()) {
-    case PrimitiveType::HalfSpace: return halfSpaceValue<kGradient>(*prim.as<HalfSpace>(), p, g);
-    case PrimitiveType::Box: return boxValue<kGradient>(*prim.as<Box>(), p, g);
-    case PrimitiveType::Cylinder: return cylinderValue<kGradient>(*prim.as<Cylinder>(), p, g);
-    case PrimitiveType::Cone: return coneValue<kGradient>(*prim.as<Cone>(), p, g);
-    case PrimitiveType::Sphere: return sphereValue<kGradient>(*prim.as<Sphere>(), p, g);
-    case PrimitiveType::Torus: return torusValue<kGradient>(*prim.as<Torus>(), p, g);
+    case PrimitiveType::HalfSpace:
+      return halfSpaceValue<kGradient>(*prim.as<HalfSpace>(), p, g);
+    case PrimitiveType::Box:
+      return boxValue<kGradient>(*prim.as<Box>(), p, g);
+    case PrimitiveType::Cylinder:
+      return cylinderValue<kGradient>(*prim.as<Cylinder>(), p, g);
+    case PrimitiveType::Cone:
+      return coneValue<kGradient>(*prim.as<Cone>(), p, g);
+    case PrimitiveType::Sphere:
+      return sphereValue<kGradient>(*prim.as<Sphere>(), p, g);
+    case PrimitiveType::Torus:
+      return torusValue<kGradient>(*prim.as<Torus>(), p, g);
   }
   return 0.0;
 }
@@ -261,12 +267,16 @@ void Primitive::values(std::span<const Vec3> points, std::span<double> out) cons
   switch (type()) {
     case PrimitiveType::HalfSpace:
       return valuesOf<halfSpaceValue<false>>(*as<HalfSpace>(), points, out);
-    case PrimitiveType::Box: return valuesOf<boxValue<false>>(*as<Box>(), points, out);
+    case PrimitiveType::Box:
+      return valuesOf<boxValue<false>>(*as<Box>(), points, out);
     case PrimitiveType::Cylinder:
       return valuesOf<cylinderValue<false>>(*as<Cylinder>(), points, out);
-    case PrimitiveType::Cone: return valuesOf<coneValue<false>>(*as<Cone>(), points, out);
-    case PrimitiveType::Sphere: return valuesOf<sphereValue<false>>(*as<Sphere>(), points, out);
-    case PrimitiveType::Torus: return valuesOf<torusValue<false>>(*as<Torus>(), points, out);
+    case PrimitiveType::Cone:
+      return valuesOf<coneValue<false>>(*as<Cone>(), points, out);
+    case PrimitiveType::Sphere:
+      return valuesOf<sphereValue<false>>(*as<Sphere>(), points, out);
+    case PrimitiveType::Torus:
+      return valuesOf<torusValue<false>>(*as<Torus>(), points, out);
   }
 }
 
@@ -298,7 +308,8 @@ std::size_t Primitive::hash() const {
 Aabb Primitive::bounds() const {
   Aabb b;
   switch (type()) {
-    case PrimitiveType::HalfSpace: return Aabb::everything();
+    case PrimitiveType::HalfSpace:
+      return Aabb::everything();
     case PrimitiveType::Box: {
       const Box& s = *as<Box>();
       const Vec3 e = s.axes.cwiseAbs() * s.halfSize;
@@ -345,8 +356,10 @@ Aabb Primitive::bounds() const {
 
 double Primitive::volume() const {
   switch (type()) {
-    case PrimitiveType::HalfSpace: return std::numeric_limits<double>::infinity();
-    case PrimitiveType::Box: return 8.0 * as<Box>()->halfSize.prod();
+    case PrimitiveType::HalfSpace:
+      return std::numeric_limits<double>::infinity();
+    case PrimitiveType::Box:
+      return 8.0 * as<Box>()->halfSize.prod();
     case PrimitiveType::Cylinder: {
       const Cylinder& s = *as<Cylinder>();
       return kPi * s.radius * s.radius * s.height;
@@ -370,7 +383,8 @@ double Primitive::volume() const {
 
 double Primitive::surfaceArea() const {
   switch (type()) {
-    case PrimitiveType::HalfSpace: return std::numeric_limits<double>::infinity();
+    case PrimitiveType::HalfSpace:
+      return std::numeric_limits<double>::infinity();
     case PrimitiveType::Box: {
       const Vec3& h = as<Box>()->halfSize;
       return 8.0 * (h.x() * h.y() + h.y() * h.z() + h.x() * h.z());
@@ -495,12 +509,18 @@ bool Primitive::approxEqual(const Primitive& other, double tol) const {
 
 std::string_view primitiveTypeName(PrimitiveType type) {
   switch (type) {
-    case PrimitiveType::HalfSpace: return "halfspace";
-    case PrimitiveType::Box: return "box";
-    case PrimitiveType::Cylinder: return "cylinder";
-    case PrimitiveType::Cone: return "cone";
-    case PrimitiveType::Sphere: return "sphere";
-    case PrimitiveType::Torus: return "torus";
+    case PrimitiveType::HalfSpace:
+      return "halfspace";
+    case PrimitiveType::Box:
+      return "box";
+    case PrimitiveType::Cylinder:
+      return "cylinder";
+    case PrimitiveType::Cone:
+      return "cone";
+    case PrimitiveType::Sphere:
+      return "sphere";
+    case PrimitiveType::Torus:
+      return "torus";
   }
   return "unknown";
 }

@@ -5,13 +5,13 @@
 /// The gradient of f therefore points inwards; the outward surface normal is
 /// -grad f.
 
-#include "core/geometry.h"
-
 #include <cstddef>
 #include <span>
 #include <string>
 #include <string_view>
 #include <variant>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 
@@ -68,14 +68,14 @@ using PrimitiveShape = std::variant<HalfSpace, Box, Cylinder, Cone, Sphere, Toru
 /// A solid primitive: a shape with its exact signed distance field.
 class Primitive {
  public:
-  Primitive() = default;  ///< the half-space z <= 0
+  Primitive() = default;                                         ///< the half-space z <= 0
   Primitive(PrimitiveShape shape) : shape_(std::move(shape)) {}  // NOLINT: implicit by design
-  Primitive(HalfSpace s) : shape_(s) {}                           // NOLINT
-  Primitive(Box s) : shape_(s) {}                                 // NOLINT
-  Primitive(Cylinder s) : shape_(s) {}                            // NOLINT
-  Primitive(Cone s) : shape_(s) {}                                // NOLINT
-  Primitive(Sphere s) : shape_(s) {}                              // NOLINT
-  Primitive(Torus s) : shape_(s) {}                               // NOLINT
+  Primitive(HalfSpace s) : shape_(s) {}                          // NOLINT
+  Primitive(Box s) : shape_(s) {}                                // NOLINT
+  Primitive(Cylinder s) : shape_(s) {}                           // NOLINT
+  Primitive(Cone s) : shape_(s) {}                               // NOLINT
+  Primitive(Sphere s) : shape_(s) {}                             // NOLINT
+  Primitive(Torus s) : shape_(s) {}                              // NOLINT
 
   PrimitiveType type() const { return static_cast<PrimitiveType>(shape_.index()); }
   const PrimitiveShape& shape() const { return shape_; }

@@ -56,8 +56,10 @@ const SetOperations& rFunctionOperations() {
 
 const SetOperations& setOperations(SetOperationKind kind) {
   switch (kind) {
-    case SetOperationKind::MinMax: return minMaxOperations();
-    case SetOperationKind::RFunction: return rFunctionOperations();
+    case SetOperationKind::MinMax:
+      return minMaxOperations();
+    case SetOperationKind::RFunction:
+      return rFunctionOperations();
   }
   return minMaxOperations();
 }

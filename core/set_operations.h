@@ -5,10 +5,10 @@
 /// are smooth). Value-only forms (MinMaxValues, RFunctionValues) give the same
 /// values as the implementations, bit for bit, without gradients.
 
-#include "core/geometry.h"
-
 #include <cmath>
 #include <string_view>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 

@@ -11,8 +11,8 @@ namespace csgvox {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr std::size_t kChunk = 256;       // points per batch: the scratch stack stays in cache
-constexpr double kRoundingSlack = 1e-9;   // relative slack on computed bounds
+constexpr std::size_t kChunk = 256;      // points per batch: the scratch stack stays in cache
+constexpr double kRoundingSlack = 1e-9;  // relative slack on computed bounds
 
 // Euclidean distance between two boxes (0 when they overlap).
 double boxDistance(const Aabb& a, const Aabb& b) {
@@ -37,6 +37,12 @@ class ValueStack {
   T* data_;
 };
 
+// a[i] = op(a[i], b[i]) for i < n.
+template <class Op>
+void combine(double* a, const double* b, std::size_t n, Op op) {
+  for (std::size_t i = 0; i < n; ++i) a[i] = op(a[i], b[i]);
+}
+
 }  // namespace
 
 // Most values a program holds at once.
@@ -49,9 +55,7 @@ std::size_t TreeProgram::depthOf(const std::vector<Step>& steps) {
   return most;
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 TreeProgram::TreeProgram() : leaves_(std::make_shared<Leaves>()), threshold_(kInf) {
   steps_.push_back({Op::Constant, 0, -kInf});
@@ -103,9 +107,15 @@ double TreeProgram::value(const Vec3& p) const {
   std::size_t top = 0;  // number of values on the stack
   for (const Step& step : steps_) {
     switch (step.op) {
-      case Op::Leaf: s[top++] = leaves_->primitives[step.leaf].value(p); break;
-      case Op::Constant: s[top++] = step.constant; break;
-      case Op::Negate: s[top - 1] = -s[top - 1]; break;
+      case Op::Leaf:
+        s[top++] = leaves_->primitives[step.leaf].value(p);
+        break;
+      case Op::Constant:
+        s[top++] = step.constant;
+        break;
+      case Op::Negate:
+        s[top - 1] = -s[top - 1];
+        break;
       case Op::Unite:
         --top;
         s[top - 1] = MinMaxValues::unite(s[top - 1], s[top]);
@@ -164,26 +174,22 @@ void TreeProgram::runValues(std::span<const Vec3> points, std::span<double> out)
         case Op::Leaf:
           leaves_->primitives[step.leaf].values(chunk, std::span<double>(array(top++), n));
           break;
-        case Op::Constant: std::fill_n(array(top++), n, step.constant); break;
+        case Op::Constant:
+          std::fill_n(array(top++), n, step.constant);
+          break;
         case Op::Negate: {
           double* a = array(top - 1);
           for (std::size_t i = 0; i < n; ++i) a[i] = -a[i];
           break;
         }
-        case Op::Unite: {
+        case Op::Unite:
           --top;
-          double* a = array(top - 1);
-          const double* b = array(top);
-          for (std::size_t i = 0; i < n; ++i) a[i] = Ops::unite(a[i], b[i]);
+          combine(array(top - 1), array(top), n, Ops::unite);
           break;
-        }
-        case Op::Intersect: {
+        case Op::Intersect:
           --top;
-          double* a = array(top - 1);
-          const double* b = array(top);
-          for (std::size_t i = 0; i < n; ++i) a[i] = Ops::intersect(a[i], b[i]);
+          combine(array(top - 1), array(top), n, Ops::intersect);
           break;
-        }
       }
     }
     std::copy_n(array(0), n, out.begin() + static_cast<std::ptrdiff_t>(start));
@@ -196,8 +202,10 @@ void TreeProgram::values(std::span<const Vec3> points, std::span<double> out,
     throw std::invalid_argument("values: points and out differ in size");
   }
   switch (ops) {
-    case SetOperationKind::MinMax: return runValues<MinMaxValues>(points, out);
-    case SetOperationKind::RFunction: return runValues<RFunctionValues>(points, out);
+    case SetOperationKind::MinMax:
+      return runValues<MinMaxValues>(points, out);
+    case SetOperationKind::RFunction:
+      return runValues<RFunctionValues>(points, out);
   }
 }
 
@@ -249,7 +257,9 @@ TreeProgram TreeProgram::restricted(const Aabb& region, double threshold) const 
         push(lo, hi, step);
         break;
       }
-      case Op::Constant: push(step.constant, step.constant, step); break;
+      case Op::Constant:
+        push(step.constant, step.constant, step);
+        break;
       case Op::Negate: {
         Entry& e = stack.back();
         std::swap(e.lo, e.hi);

@@ -6,12 +6,12 @@
 /// subtrees that cannot change the field near the surface there (meshing of
 /// trees with many leaves).
 
-#include "core/csg_tree.h"
-
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
+
+#include "core/csg_tree.h"
 
 namespace csgvox {
 

@@ -30,19 +30,19 @@ bool isOpenScadReserved(const std::string& name) {
       "module", "function", "include", "use", "if", "else", "for", "intersection_for", "let",
       "each", "assert", "echo", "assign", "true", "false", "undef", "PI", "inf", "nan",
       // 3D and 2D primitives
-      "cube", "sphere", "cylinder", "polyhedron", "circle", "square", "polygon", "text",
-      "import", "import_stl", "import_off", "import_dxf", "surface", "roof",
+      "cube", "sphere", "cylinder", "polyhedron", "circle", "square", "polygon", "text", "import",
+      "import_stl", "import_off", "import_dxf", "surface", "roof",
       // transformations and operations
-      "translate", "rotate", "scale", "resize", "mirror", "multmatrix", "color", "offset",
-      "hull", "minkowski", "union", "difference", "intersection", "render", "projection",
-      "linear_extrude", "rotate_extrude", "dxf_linear_extrude", "dxf_rotate_extrude", "children",
-      "child", "group", "parent_module", "fill",
+      "translate", "rotate", "scale", "resize", "mirror", "multmatrix", "color", "offset", "hull",
+      "minkowski", "union", "difference", "intersection", "render", "projection", "linear_extrude",
+      "rotate_extrude", "dxf_linear_extrude", "dxf_rotate_extrude", "children", "child", "group",
+      "parent_module", "fill",
       // functions
-      "abs", "sign", "sin", "cos", "tan", "acos", "asin", "atan", "atan2", "floor", "round",
-      "ceil", "ln", "len", "log", "pow", "sqrt", "exp", "rands", "min", "max", "concat",
-      "lookup", "str", "chr", "ord", "search", "version", "version_num", "norm", "cross",
-      "is_undef", "is_bool", "is_num", "is_string", "is_list", "is_function", "is_object",
-      "dxf_dim", "dxf_cross", "object", "textmetrics", "fontmetrics"};
+      "abs", "sign", "sin", "cos", "tan", "acos", "asin", "atan", "atan2", "floor", "round", "ceil",
+      "ln", "len", "log", "pow", "sqrt", "exp", "rands", "min", "max", "concat", "lookup", "str",
+      "chr", "ord", "search", "version", "version_num", "norm", "cross", "is_undef", "is_bool",
+      "is_num", "is_string", "is_list", "is_function", "is_object", "dxf_dim", "dxf_cross",
+      "object", "textmetrics", "fontmetrics"};
   return reserved.count(name) > 0;
 }
 

@@ -2,10 +2,10 @@
 /// Stable, unique, identifier-safe names for the leaves of a tree, shared by
 /// the text and OpenSCAD exports.
 
-#include "core/csg_tree.h"
-
 #include <string>
 #include <unordered_map>
+
+#include "core/csg_tree.h"
 
 namespace csgvox {
 

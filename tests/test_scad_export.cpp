@@ -1,21 +1,21 @@
 // The OpenSCAD export: its text, and (when openscad is installed) that
 // OpenSCAD renders it to the same solid as the tree and as csgvox's mesh.
 
-#include "mesh/mesh_export.h"
-#include "mesh/mesh_solid.h"
-#include "io/scad_export.h"
-#include "io/tree_names.h"
-#include "io/tree_json.h"
-#include "io/mesh_files.h"
-#include "part_list.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
+
+#include "io/mesh_files.h"
+#include "io/scad_export.h"
+#include "io/tree_json.h"
+#include "io/tree_names.h"
+#include "mesh/mesh_export.h"
+#include "mesh/mesh_solid.h"
+#include "part_list.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -75,11 +75,11 @@ TEST(ScadExport, ModuleNamesNeverTakeOpenScadNames) {
   for (const char* word : {"plate", "hole", "cube1", "cylinder2", "Difference", "box"}) {
     EXPECT_FALSE(isOpenScadReserved(word)) << word;
   }
-  const CsgTree t = CsgTree::subtract(
-      {CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(2, 2, 2)}, "cube"),
-       CsgTree::leaf(Cylinder{Vec3::Zero(), Vec3::UnitZ(), 1, 5}, "difference"),
-       CsgTree::leaf(Sphere{Vec3(2, 2, 2), 1}, "module"),
-       CsgTree::leaf(Sphere{Vec3(-2, 2, 2), 1}, "difference_1")});
+  const CsgTree t =
+      CsgTree::subtract({CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(2, 2, 2)}, "cube"),
+                         CsgTree::leaf(Cylinder{Vec3::Zero(), Vec3::UnitZ(), 1, 5}, "difference"),
+                         CsgTree::leaf(Sphere{Vec3(2, 2, 2), 1}, "module"),
+                         CsgTree::leaf(Sphere{Vec3(-2, 2, 2), 1}, "difference_1")});
   const std::string s = scadText(t);
   EXPECT_NE(s.find("module cube_1() "), std::string::npos) << s;
   EXPECT_NE(s.find("module difference_2() "), std::string::npos) << s;  // difference_1 is taken
@@ -106,19 +106,18 @@ TEST_P(ScadRendersTheSameSolid, AsTheTreeAndItsMesh) {
   const std::string cmd = "openscad -o '" + (dir / "openscad.stl").string() + "' '" +
                           (dir / "tree.scad").string() + "' > '" + (dir / "log.txt").string() +
                           "' 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << "openscad failed on " << part << ", see "
-                                         << (dir / "log.txt");
+  ASSERT_EQ(std::system(cmd.c_str()), 0)
+      << "openscad failed on " << part << ", see " << (dir / "log.txt");
   const TriangleMesh scadMesh = readMesh(dir / "openscad.stl");
   const Aabb box = tree.bounds();
   const double voxel = box.diagonal() / 400.0;
   const MeshSolid scadSolid(scadMesh, voxel);
   const MeshSolid renderSolid(meshTree(tree), voxel);
   const auto inScad = [&](const Vec3& p) { return scadSolid.contains(p); };
-  const double vsTree =
-      test::sampledIou(box, inScad, [&](const Vec3& p) { return tree.contains(p); }, 200000, 1);
-  const double vsRender =
-      test::sampledIou(box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); },
-                       200000, 2);
+  const double vsTree = test::sampledIou(
+      box, inScad, [&](const Vec3& p) { return tree.contains(p); }, 200000, 1);
+  const double vsRender = test::sampledIou(
+      box, inScad, [&](const Vec3& p) { return renderSolid.contains(p); }, 200000, 2);
   EXPECT_GE(vsTree, 0.99) << part;
   EXPECT_GE(vsRender, 0.99) << part;
   RecordProperty("iou_vs_tree", std::to_string(vsTree));
