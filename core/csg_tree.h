@@ -2,6 +2,10 @@
 /// The CSG tree: an immutable FRep value. Leaves are primitives; inner nodes
 /// are union, intersection, difference (first child minus the others) and
 /// complement. Edits return new trees that share unchanged subtrees.
+/// Evaluation: value() per point and values() over arrays of points give the
+/// field without gradients (bit for bit the f of evaluate(), which alone
+/// computes gradients); core/tree_program.h compiles a tree once for repeated
+/// use and prunes it to a region.
 
 #include <cstddef>
 #include <memory>

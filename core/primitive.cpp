@@ -30,7 +30,7 @@ struct Meridian {
 
 // The radial direction is only computed with kGradient.
 template <bool kGradient>
-Meridian toMeridian(const Vec3& p, const Vec3& center, const Vec3& axis) {
+[[gnu::always_inline]] inline Meridian toMeridian(const Vec3& p, const Vec3& center, const Vec3& axis) {
   const Vec3 d = p - center;
   const double z = d.dot(axis);
   const Vec3 r = d - z * axis;
@@ -55,7 +55,7 @@ double fromMeridian(const Sd2& s, const Meridian& m, const Vec3& axis, Vec3* gra
 
 // Signed distance of a 2D box [-hx,hx]x[-hz,hz] centred at the origin, for a
 // point given in |coordinates| (qx, qz >= 0 side), with gradient w.r.t. qx, qz.
-Sd2 boxSd2(double qx, double qz, double hx, double hz) {
+[[gnu::always_inline]] inline Sd2 boxSd2(double qx, double qz, double hx, double hz) {
   const double dx = qx - hx;
   const double dz = qz - hz;
   if (dx > 0.0 && dz > 0.0) {
