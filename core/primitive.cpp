@@ -30,7 +30,8 @@ struct Meridian {
 
 // The radial direction is only computed with kGradient.
 template <bool kGradient>
-[[gnu::always_inline]] inline Meridian toMeridian(const Vec3& p, const Vec3& center, const Vec3& axis) {
+[[gnu::always_inline]] inline Meridian toMeridian(const Vec3& p, const Vec3& center,
+                                                  const Vec3& axis) {
   const Vec3 d = p - center;
   const double z = d.dot(axis);
   const Vec3 r = d - z * axis;
