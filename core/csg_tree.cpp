@@ -1,6 +1,7 @@
 #include "core/csg_tree.h"
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <stdexcept>
 
@@ -321,19 +322,11 @@ CsgTree CsgTree::replaceSubtree(const Node* target, const CsgTree& replacement) 
 }
 
 std::string_view nodeKindName(NodeKind kind) {
-  switch (kind) {
-    case NodeKind::Primitive:
-      return "primitive";
-    case NodeKind::Union:
-      return "union";
-    case NodeKind::Intersection:
-      return "intersection";
-    case NodeKind::Difference:
-      return "difference";
-    case NodeKind::Complement:
-      return "complement";
-  }
-  return "unknown";
+  // In the order of NodeKind.
+  static constexpr std::array<std::string_view, 5> kNames = {"primitive", "union", "intersection",
+                                                             "difference", "complement"};
+  const auto i = static_cast<std::size_t>(kind);
+  return i < kNames.size() ? kNames[i] : "unknown";
 }
 
 }  // namespace csgvox

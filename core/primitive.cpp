@@ -509,21 +509,11 @@ bool Primitive::approxEqual(const Primitive& other, double tol) const {
 }
 
 std::string_view primitiveTypeName(PrimitiveType type) {
-  switch (type) {
-    case PrimitiveType::HalfSpace:
-      return "halfspace";
-    case PrimitiveType::Box:
-      return "box";
-    case PrimitiveType::Cylinder:
-      return "cylinder";
-    case PrimitiveType::Cone:
-      return "cone";
-    case PrimitiveType::Sphere:
-      return "sphere";
-    case PrimitiveType::Torus:
-      return "torus";
-  }
-  return "unknown";
+  // In the order of PrimitiveType.
+  static constexpr std::array<std::string_view, 6> kNames = {"halfspace", "box",    "cylinder",
+                                                             "cone",      "sphere", "torus"};
+  const auto i = static_cast<std::size_t>(type);
+  return i < kNames.size() ? kNames[i] : "unknown";
 }
 
 PrimitiveType primitiveTypeFromName(std::string_view name) {
