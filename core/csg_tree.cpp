@@ -1,21 +1,28 @@
 #include "core/csg_tree.h"
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <stdexcept>
+
+#include "core/tree_program.h"
 
 namespace csgvox {
 namespace {
 
+const LeafData& noLeaf() {
+  static const LeafData none;
+  return none;
+}
+
 NodePtr makeOperation(NodeKind kind, const std::vector<CsgTree>& operands) {
   if (operands.empty()) throw std::invalid_argument("an operation needs at least one operand");
-  auto node = std::make_shared<Node>();
-  node->kind = kind;
+  std::vector<NodePtr> children;
   for (const CsgTree& t : operands) {
     if (t.empty()) throw std::invalid_argument("an operand is an empty tree");
-    node->children.push_back(t.root());
+    children.push_back(t.root());
   }
-  return node;
+  return std::make_shared<Node>(kind, std::move(children));
 }
 
 template <class Fn>
@@ -60,11 +67,75 @@ FieldValue evaluateNode(const Node& node, const Vec3& p, const SetOperations& op
   return {};
 }
 
+// Value only, with the set operations chosen at compile time; the same
+// arithmetic and order as evaluateNode.
+template <class Ops>
+double valueOf(const Node& node, const Vec3& p) {
+  switch (node.kind) {
+    case NodeKind::Primitive:
+      return node.primitive.value(p);
+    case NodeKind::Complement:
+      return -valueOf<Ops>(*node.children.front(), p);
+    case NodeKind::Union: {
+      double acc = valueOf<Ops>(*node.children.front(), p);
+      for (std::size_t i = 1; i < node.children.size(); ++i) {
+        acc = Ops::unite(acc, valueOf<Ops>(*node.children[i], p));
+      }
+      return acc;
+    }
+    case NodeKind::Intersection: {
+      double acc = valueOf<Ops>(*node.children.front(), p);
+      for (std::size_t i = 1; i < node.children.size(); ++i) {
+        acc = Ops::intersect(acc, valueOf<Ops>(*node.children[i], p));
+      }
+      return acc;
+    }
+    case NodeKind::Difference: {
+      double acc = valueOf<Ops>(*node.children.front(), p);
+      for (std::size_t i = 1; i < node.children.size(); ++i) {
+        acc = Ops::intersect(acc, -valueOf<Ops>(*node.children[i], p));
+      }
+      return acc;
+    }
+  }
+  return 0.0;
+}
+
+std::size_t mixHash(std::size_t h, std::size_t v) {
+  return (h ^ (v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2))) * 0x100000001b3ull;
+}
+
+std::size_t hashOf(const Node& node) {
+  std::size_t h = mixHash(static_cast<std::size_t>(node.kind) + 1, node.children.size());
+  if (node.kind == NodeKind::Primitive) return mixHash(h, node.primitive.hash());
+  for (const NodePtr& c : node.children) h = mixHash(h, hashOf(*c));
+  return h;
+}
+
+// Copy of `node` with every occurrence of `target` replaced; nullptr when
+// `target` does not occur below it (the caller then keeps `node`).
+NodePtr replaced(const NodePtr& node, const Node* target, const NodePtr& replacement) {
+  if (node.get() == target) return replacement;
+  std::vector<NodePtr> children = node->children;
+  bool changed = false;
+  for (NodePtr& c : children) {
+    if (NodePtr r = replaced(c, target, replacement)) {
+      c = std::move(r);
+      changed = true;
+    }
+  }
+  if (!changed) return nullptr;
+  return std::make_shared<Node>(node->kind, std::move(children));
+}
+
 Aabb boundsOf(const Node& node) {
   switch (node.kind) {
-    case NodeKind::Primitive: return node.primitive.bounds();
-    case NodeKind::Complement: return Aabb::everything();
-    case NodeKind::Difference: return boundsOf(*node.children.front());
+    case NodeKind::Primitive:
+      return node.primitive.bounds();
+    case NodeKind::Complement:
+      return Aabb::everything();
+    case NodeKind::Difference:
+      return boundsOf(*node.children.front());
     case NodeKind::Union: {
       Aabb b;
       for (const NodePtr& c : node.children) b.extend(boundsOf(*c));
@@ -119,12 +190,25 @@ void validateNode(const Node& node) {
 
 }  // namespace
 
+Node::Node(Primitive leafPrimitive, std::string leafName)
+    : kind(NodeKind::Primitive),
+      leaf_(std::make_unique<const LeafData>(
+          LeafData{std::move(leafPrimitive), std::move(leafName)})),
+      primitive(leaf_->primitive),
+      name(leaf_->name) {}
+
+Node::Node(NodeKind operation, std::vector<NodePtr> operands)
+    : kind(operation),
+      children(std::move(operands)),
+      primitive(noLeaf().primitive),
+      name(noLeaf().name) {
+  if (operation == NodeKind::Primitive) {
+    throw std::invalid_argument("an operation node needs an operation kind");
+  }
+}
+
 CsgTree CsgTree::leaf(Primitive primitive, std::string name) {
-  auto node = std::make_shared<Node>();
-  node->kind = NodeKind::Primitive;
-  node->primitive = std::move(primitive);
-  node->name = std::move(name);
-  return CsgTree(std::move(node));
+  return CsgTree(std::make_shared<Node>(std::move(primitive), std::move(name)));
 }
 
 CsgTree CsgTree::unite(const std::vector<CsgTree>& operands) {
@@ -168,7 +252,19 @@ std::vector<const Node*> CsgTree::leaves() const {
 }
 
 double CsgTree::value(const Vec3& p, const SetOperations& ops) const {
+  if (!root_) return -std::numeric_limits<double>::infinity();
+  switch (ops.kind()) {
+    case SetOperationKind::MinMax:
+      return valueOf<MinMaxValues>(*root_, p);
+    case SetOperationKind::RFunction:
+      return valueOf<RFunctionValues>(*root_, p);
+  }
   return evaluate(p, ops).f;
+}
+
+void CsgTree::values(std::span<const Vec3> points, std::span<double> out,
+                     SetOperationKind ops) const {
+  TreeProgram(*this).values(points, out, ops);
 }
 
 FieldValue CsgTree::evaluate(const Vec3& p, const SetOperations& ops) const {
@@ -192,15 +288,45 @@ bool CsgTree::structurallyEqual(const CsgTree& other, double tolerance) const {
   return equalNodes(*root_, *other.root_, tolerance);
 }
 
-std::string_view nodeKindName(NodeKind kind) {
-  switch (kind) {
-    case NodeKind::Primitive: return "primitive";
-    case NodeKind::Union: return "union";
-    case NodeKind::Intersection: return "intersection";
-    case NodeKind::Difference: return "difference";
-    case NodeKind::Complement: return "complement";
+std::size_t CsgTree::structuralHash() const { return root_ ? hashOf(*root_) : 0; }
+
+const NodePtr& CsgTree::nodeAt(const NodePath& path) const {
+  if (!root_) throw std::out_of_range("nodeAt: the tree is empty");
+  const NodePtr* node = &root_;
+  for (std::size_t i : path) {
+    if (i >= (*node)->children.size()) throw std::out_of_range("nodeAt: the path leaves the tree");
+    node = &(*node)->children[i];
   }
-  return "unknown";
+  return *node;
+}
+
+CsgTree CsgTree::replaceSubtree(const NodePath& path, const CsgTree& replacement) const {
+  if (replacement.empty()) throw std::invalid_argument("replaceSubtree: the replacement is empty");
+  nodeAt(path);  // checks the path
+  // Rebuild the operation nodes along the path, bottom up.
+  NodePtr built = replacement.root();
+  for (std::size_t level = path.size(); level-- > 0;) {
+    const NodePtr& parent = nodeAt(NodePath(path.begin(), path.begin() + level));
+    std::vector<NodePtr> children = parent->children;
+    children[path[level]] = built;
+    built = std::make_shared<Node>(parent->kind, std::move(children));
+  }
+  return CsgTree(std::move(built));
+}
+
+CsgTree CsgTree::replaceSubtree(const Node* target, const CsgTree& replacement) const {
+  if (replacement.empty()) throw std::invalid_argument("replaceSubtree: the replacement is empty");
+  NodePtr r = root_ && target ? replaced(root_, target, replacement.root()) : nullptr;
+  if (!r) throw std::invalid_argument("replaceSubtree: the node is not in the tree");
+  return CsgTree(std::move(r));
+}
+
+std::string_view nodeKindName(NodeKind kind) {
+  // In the order of NodeKind.
+  static constexpr std::array<std::string_view, 5> kNames = {"primitive", "union", "intersection",
+                                                             "difference", "complement"};
+  const auto i = static_cast<std::size_t>(kind);
+  return i < kNames.size() ? kNames[i] : "unknown";
 }
 
 }  // namespace csgvox

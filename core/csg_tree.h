@@ -2,14 +2,20 @@
 /// The CSG tree: an immutable FRep value. Leaves are primitives; inner nodes
 /// are union, intersection, difference (first child minus the others) and
 /// complement. Edits return new trees that share unchanged subtrees.
+/// Evaluation: value() per point and values() over arrays of points give the
+/// field without gradients (bit for bit the f of evaluate(), which alone
+/// computes gradients); core/tree_program.h compiles a tree once for repeated
+/// use and prunes it to a region.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
 
 #include "core/primitive.h"
 #include "core/set_operations.h"
-
-#include <memory>
-#include <optional>
-#include <string>
-#include <vector>
 
 namespace csgvox {
 
@@ -20,13 +26,38 @@ struct Node;
 /// Nodes are shared and never modified after construction.
 using NodePtr = std::shared_ptr<const Node>;
 
-/// One node of a CSG tree.
-struct Node {
-  NodeKind kind = NodeKind::Primitive;
-  Primitive primitive;            ///< the leaf's primitive (kind == Primitive only)
-  std::string name;               ///< optional label of a leaf, e.g. "hole1"
-  std::vector<NodePtr> children;  ///< operands of an operation, in order
+/// The payload of a leaf node.
+struct LeafData {
+  Primitive primitive;  ///< the leaf's solid
+  std::string name;     ///< optional label, e.g. "hole1"
 };
+
+/// One node of a CSG tree. Only leaves hold a LeafData; `primitive` and
+/// `name` read it (on an operation node they read a shared default: the
+/// half-space z <= 0 and an empty name). Nodes are not copyable: `primitive`
+/// and `name` refer to the node's own payload.
+struct Node {
+  /// A leaf.
+  explicit Node(Primitive leafPrimitive = {}, std::string leafName = {});
+  /// An operation node (kind != Primitive) with its operands.
+  Node(NodeKind operation, std::vector<NodePtr> operands);
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  NodeKind kind = NodeKind::Primitive;
+  std::vector<NodePtr> children;  ///< operands of an operation, in order
+
+ private:
+  std::unique_ptr<const LeafData> leaf_;  // null on operation nodes
+
+ public:
+  const Primitive& primitive;  ///< the leaf's primitive (kind == Primitive only)
+  const std::string& name;     ///< optional label of a leaf, e.g. "hole1"
+};
+
+/// A node's place in a tree: the child index taken at each level from the
+/// root (empty for the root itself).
+using NodePath = std::vector<std::size_t>;
 
 /// A CSG tree (possibly empty), held by value.
 class CsgTree {
@@ -59,8 +90,14 @@ class CsgTree {
   /// The leaves in depth-first order.
   std::vector<const Node*> leaves() const;
 
-  /// FRep value at p (>= 0 inside).
+  /// FRep value at p (>= 0 inside), without gradients: bit for bit the f of
+  /// evaluate(p, ops). -inf for an empty tree.
   double value(const Vec3& p, const SetOperations& ops = minMaxOperations()) const;
+  /// out[i] = value(points[i]) for every point (bit for bit), evaluating each
+  /// leaf and each operation over whole arrays of points (see TreeProgram).
+  /// @throw std::invalid_argument when the spans differ in size.
+  void values(std::span<const Vec3> points, std::span<double> out,
+              SetOperationKind ops = SetOperationKind::MinMax) const;
   /// FRep value and gradient at p.
   FieldValue evaluate(const Vec3& p, const SetOperations& ops = minMaxOperations()) const;
   /// True when p is inside or on the solid.
@@ -77,9 +114,31 @@ class CsgTree {
   /// Leaf names are ignored.
   bool structurallyEqual(const CsgTree& other, double tolerance = 0.0) const;
   bool operator==(const CsgTree& other) const { return structurallyEqual(other); }
+  /// Hash of the structure (node kinds, arity, order, primitive parameters;
+  /// leaf names ignored): trees equal by structurallyEqual(other, 0) hash
+  /// equal. Takes time linear in the number of nodes. 0 for an empty tree.
+  std::size_t structuralHash() const;
+
+  /// The node at `path`. @throw std::out_of_range when the path leaves the tree.
+  const NodePtr& nodeAt(const NodePath& path) const;
+  /// The tree with the node at `path` replaced by `replacement`; every subtree
+  /// off the path is shared with this tree.
+  /// @throw std::out_of_range when the path leaves the tree;
+  ///        std::invalid_argument when `replacement` is empty.
+  CsgTree replaceSubtree(const NodePath& path, const CsgTree& replacement) const;
+  /// The tree with every occurrence of `target` (compared by address: a shared
+  /// subtree is replaced wherever it is used) replaced by `replacement`.
+  /// @throw std::invalid_argument when `target` is not in the tree or
+  ///        `replacement` is empty.
+  CsgTree replaceSubtree(const Node* target, const CsgTree& replacement) const;
 
  private:
   NodePtr root_;
+};
+
+/// Hash functor for unordered containers keyed by trees (fitness caches).
+struct CsgTreeHash {
+  std::size_t operator()(const CsgTree& tree) const { return tree.structuralHash(); }
 };
 
 /// Lower-case operation name used in files: "union", "intersection",

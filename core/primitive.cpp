@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <stdexcept>
 
@@ -21,18 +23,23 @@ struct Sd2 {
 
 // Cylindrical coordinates of p around an axis through `center`.
 struct Meridian {
-  double rho;    // distance from the axis
-  double z;      // signed coordinate along the axis
-  Vec3 radial;   // unit radial direction (arbitrary perpendicular on the axis)
+  double rho;   // distance from the axis
+  double z;     // signed coordinate along the axis
+  Vec3 radial;  // unit radial direction (arbitrary perpendicular on the axis)
 };
 
-Meridian toMeridian(const Vec3& p, const Vec3& center, const Vec3& axis) {
+// The radial direction is only computed with kGradient.
+template <bool kGradient>
+[[gnu::always_inline]] inline Meridian toMeridian(const Vec3& p, const Vec3& center,
+                                                  const Vec3& axis) {
   const Vec3 d = p - center;
   const double z = d.dot(axis);
   const Vec3 r = d - z * axis;
   const double rho = r.norm();
   Meridian m{rho, z, Vec3::Zero()};
-  if (rho > 1e-300) {
+  if constexpr (!kGradient) {
+    return m;
+  } else if (rho > 1e-300) {
     m.radial = r / rho;
   } else {
     m.radial = frameFromAxis(axis).col(0);
@@ -40,15 +47,16 @@ Meridian toMeridian(const Vec3& p, const Vec3& center, const Vec3& axis) {
   return m;
 }
 
-// Returns f = -sd and the 3D gradient of f.
-double fromMeridian(const Sd2& s, const Meridian& m, const Vec3& axis, Vec3& gradient) {
-  gradient = -(s.gRho * m.radial + s.gZ * axis);
+// Returns f = -sd and, with kGradient, the 3D gradient of f.
+template <bool kGradient>
+double fromMeridian(const Sd2& s, const Meridian& m, const Vec3& axis, Vec3* gradient) {
+  if constexpr (kGradient) *gradient = -(s.gRho * m.radial + s.gZ * axis);
   return -s.d;
 }
 
 // Signed distance of a 2D box [-hx,hx]x[-hz,hz] centred at the origin, for a
 // point given in |coordinates| (qx, qz >= 0 side), with gradient w.r.t. qx, qz.
-Sd2 boxSd2(double qx, double qz, double hx, double hz) {
+[[gnu::always_inline]] inline Sd2 boxSd2(double qx, double qz, double hx, double hz) {
   const double dx = qx - hx;
   const double dz = qz - hz;
   if (dx > 0.0 && dz > 0.0) {
@@ -105,12 +113,16 @@ Sd2 convexSd2(double x, double y, const Segment2* segs, int count) {
   return {bestInside, gInX, gInY};
 }
 
-double halfSpaceValue(const HalfSpace& s, const Vec3& p, Vec3& g) {
-  g = -s.normal;
+// The primitives' signed distances; the gradient is written to *g with
+// kGradient only (the value is computed the same way either way).
+template <bool kGradient>
+double halfSpaceValue(const HalfSpace& s, const Vec3& p, Vec3* g) {
+  if constexpr (kGradient) *g = -s.normal;
   return s.offset - s.normal.dot(p);
 }
 
-double boxValue(const Box& s, const Vec3& p, Vec3& g) {
+template <bool kGradient>
+double boxValue(const Box& s, const Vec3& p, Vec3* g) {
   const Vec3 local = s.axes.transpose() * (p - s.center);
   const Vec3 q = local.cwiseAbs() - s.halfSize;
   Vec3 gl;
@@ -118,51 +130,57 @@ double boxValue(const Box& s, const Vec3& p, Vec3& g) {
   if ((q.array() > 0.0).any()) {
     const Vec3 pos = q.cwiseMax(0.0);
     sd = pos.norm();
-    gl = pos / sd;
+    if constexpr (kGradient) gl = pos / sd;
   } else {
     int k = 0;
     for (int i = 1; i < 3; ++i) {
       if (q[i] > q[k]) k = i;
     }
     sd = q[k];
-    gl = Vec3::Unit(k);
+    if constexpr (kGradient) gl = Vec3::Unit(k);
   }
-  for (int i = 0; i < 3; ++i) {
-    if (local[i] < 0.0) gl[i] = -gl[i];
+  if constexpr (kGradient) {
+    for (int i = 0; i < 3; ++i) {
+      if (local[i] < 0.0) gl[i] = -gl[i];
+    }
+    *g = -(s.axes * gl);
   }
-  g = -(s.axes * gl);
   return -sd;
 }
 
-double cylinderValue(const Cylinder& s, const Vec3& p, Vec3& g) {
-  const Meridian m = toMeridian(p, s.center, s.axis);
+template <bool kGradient>
+double cylinderValue(const Cylinder& s, const Vec3& p, Vec3* g) {
+  const Meridian m = toMeridian<kGradient>(p, s.center, s.axis);
   Sd2 sd = boxSd2(m.rho, std::abs(m.z), s.radius, 0.5 * s.height);
   if (m.z < 0.0) sd.gZ = -sd.gZ;
-  return fromMeridian(sd, m, s.axis, g);
+  return fromMeridian<kGradient>(sd, m, s.axis, g);
 }
 
-double coneValue(const Cone& s, const Vec3& p, Vec3& g) {
-  const Meridian m = toMeridian(p, s.center, s.axis);
+template <bool kGradient>
+double coneValue(const Cone& s, const Vec3& p, Vec3* g) {
+  const Meridian m = toMeridian<kGradient>(p, s.center, s.axis);
   const double h = 0.5 * s.height;
   // Counter-clockwise trapezoid in (rho, z); the axis edge is not a boundary.
   const std::array<Segment2, 3> segs = {{
-      {0.0, -h, s.radiusBottom, -h},             // bottom cap
-      {s.radiusBottom, -h, s.radiusTop, h},      // lateral surface
-      {s.radiusTop, h, 0.0, h},                  // top cap
+      {0.0, -h, s.radiusBottom, -h},         // bottom cap
+      {s.radiusBottom, -h, s.radiusTop, h},  // lateral surface
+      {s.radiusTop, h, 0.0, h},              // top cap
   }};
   const Sd2 sd = convexSd2(m.rho, m.z, segs.data(), static_cast<int>(segs.size()));
-  return fromMeridian(sd, m, s.axis, g);
+  return fromMeridian<kGradient>(sd, m, s.axis, g);
 }
 
-double sphereValue(const Sphere& s, const Vec3& p, Vec3& g) {
+template <bool kGradient>
+double sphereValue(const Sphere& s, const Vec3& p, Vec3* g) {
   const Vec3 d = p - s.center;
   const double len = d.norm();
-  g = len > 0.0 ? Vec3(-d / len) : Vec3(-Vec3::UnitZ());
+  if constexpr (kGradient) *g = len > 0.0 ? Vec3(-d / len) : Vec3(-Vec3::UnitZ());
   return s.radius - len;
 }
 
-double torusValue(const Torus& s, const Vec3& p, Vec3& g) {
-  const Meridian m = toMeridian(p, s.center, s.axis);
+template <bool kGradient>
+double torusValue(const Torus& s, const Vec3& p, Vec3* g) {
+  const Meridian m = toMeridian<kGradient>(p, s.center, s.axis);
   const double qx = m.rho - s.majorRadius;
   const double len = std::hypot(qx, m.z);
   Sd2 sd{len - s.minorRadius, 1.0, 0.0};
@@ -170,8 +188,46 @@ double torusValue(const Torus& s, const Vec3& p, Vec3& g) {
     sd.gRho = qx / len;
     sd.gZ = m.z / len;
   }
-  return fromMeridian(sd, m, s.axis, g);
+  return fromMeridian<kGradient>(sd, m, s.axis, g);
 }
+
+template <bool kGradient>
+double shapeValue(const Primitive& prim, const Vec3& p, Vec3* g) {
+  switch (prim.type()) {
+    case PrimitiveType::HalfSpace:
+      return halfSpaceValue<kGradient>(*prim.as<HalfSpace>(), p, g);
+    case PrimitiveType::Box:
+      return boxValue<kGradient>(*prim.as<Box>(), p, g);
+    case PrimitiveType::Cylinder:
+      return cylinderValue<kGradient>(*prim.as<Cylinder>(), p, g);
+    case PrimitiveType::Cone:
+      return coneValue<kGradient>(*prim.as<Cone>(), p, g);
+    case PrimitiveType::Sphere:
+      return sphereValue<kGradient>(*prim.as<Sphere>(), p, g);
+    case PrimitiveType::Torus:
+      return torusValue<kGradient>(*prim.as<Torus>(), p, g);
+  }
+  return 0.0;
+}
+
+// out[i] = value of `shape` at points[i]: one loop per shape type.
+template <auto kValue, class Shape>
+void valuesOf(const Shape& shape, std::span<const Vec3> points, std::span<double> out) {
+  for (std::size_t i = 0; i < points.size(); ++i) out[i] = kValue(shape, points[i], nullptr);
+}
+
+// Mixes v into the hash h (64-bit).
+std::size_t mix(std::size_t h, std::uint64_t v) {
+  v *= 0x9e3779b97f4a7c15ull;
+  v ^= v >> 32;
+  return (h ^ v) * 0x100000001b3ull + 0x7f4a7c159e3779b9ull;
+}
+
+std::size_t mix(std::size_t h, double x) {
+  return mix(h, std::bit_cast<std::uint64_t>(x == 0.0 ? 0.0 : x));  // -0 == 0
+}
+
+std::size_t mix(std::size_t h, const Vec3& v) { return mix(mix(mix(h, v.x()), v.y()), v.z()); }
 
 // Half extent along world axis k of a disc of radius r perpendicular to `axis`.
 Vec3 discExtent(const Vec3& axis, double r) {
@@ -199,27 +255,62 @@ bool near(double a, double b, double tol) { return std::abs(a - b) <= tol; }
 
 }  // namespace
 
-double Primitive::value(const Vec3& p) const {
-  Vec3 g;
-  return valueAndGradient(p, g);
-}
+double Primitive::value(const Vec3& p) const { return shapeValue<false>(*this, p, nullptr); }
 
 double Primitive::valueAndGradient(const Vec3& p, Vec3& gradient) const {
-  switch (type()) {
-    case PrimitiveType::HalfSpace: return halfSpaceValue(*as<HalfSpace>(), p, gradient);
-    case PrimitiveType::Box: return boxValue(*as<Box>(), p, gradient);
-    case PrimitiveType::Cylinder: return cylinderValue(*as<Cylinder>(), p, gradient);
-    case PrimitiveType::Cone: return coneValue(*as<Cone>(), p, gradient);
-    case PrimitiveType::Sphere: return sphereValue(*as<Sphere>(), p, gradient);
-    case PrimitiveType::Torus: return torusValue(*as<Torus>(), p, gradient);
+  return shapeValue<true>(*this, p, &gradient);
+}
+
+void Primitive::values(std::span<const Vec3> points, std::span<double> out) const {
+  if (points.size() != out.size()) {
+    throw std::invalid_argument("Primitive::values: points and out differ in size");
   }
-  return 0.0;
+  switch (type()) {
+    case PrimitiveType::HalfSpace:
+      return valuesOf<halfSpaceValue<false>>(*as<HalfSpace>(), points, out);
+    case PrimitiveType::Box:
+      return valuesOf<boxValue<false>>(*as<Box>(), points, out);
+    case PrimitiveType::Cylinder:
+      return valuesOf<cylinderValue<false>>(*as<Cylinder>(), points, out);
+    case PrimitiveType::Cone:
+      return valuesOf<coneValue<false>>(*as<Cone>(), points, out);
+    case PrimitiveType::Sphere:
+      return valuesOf<sphereValue<false>>(*as<Sphere>(), points, out);
+    case PrimitiveType::Torus:
+      return valuesOf<torusValue<false>>(*as<Torus>(), points, out);
+  }
+}
+
+std::size_t Primitive::hash() const {
+  std::size_t h = mix(std::size_t{0}, std::uint64_t(type()) + 1);
+  std::visit(
+      [&h](const auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, HalfSpace>) {
+          h = mix(mix(h, s.normal), s.offset);
+        } else if constexpr (std::is_same_v<S, Box>) {
+          h = mix(mix(mix(mix(h, s.center), Vec3(s.axes.col(0))), Vec3(s.axes.col(1))),
+                  Vec3(s.axes.col(2)));
+          h = mix(h, s.halfSize);
+        } else if constexpr (std::is_same_v<S, Cylinder>) {
+          h = mix(mix(mix(mix(h, s.center), s.axis), s.radius), s.height);
+        } else if constexpr (std::is_same_v<S, Cone>) {
+          h = mix(mix(mix(mix(mix(h, s.center), s.axis), s.radiusBottom), s.radiusTop), s.height);
+        } else if constexpr (std::is_same_v<S, Sphere>) {
+          h = mix(mix(h, s.center), s.radius);
+        } else {
+          h = mix(mix(mix(mix(h, s.center), s.axis), s.majorRadius), s.minorRadius);
+        }
+      },
+      shape_);
+  return h;
 }
 
 Aabb Primitive::bounds() const {
   Aabb b;
   switch (type()) {
-    case PrimitiveType::HalfSpace: return Aabb::everything();
+    case PrimitiveType::HalfSpace:
+      return Aabb::everything();
     case PrimitiveType::Box: {
       const Box& s = *as<Box>();
       const Vec3 e = s.axes.cwiseAbs() * s.halfSize;
@@ -266,8 +357,10 @@ Aabb Primitive::bounds() const {
 
 double Primitive::volume() const {
   switch (type()) {
-    case PrimitiveType::HalfSpace: return std::numeric_limits<double>::infinity();
-    case PrimitiveType::Box: return 8.0 * as<Box>()->halfSize.prod();
+    case PrimitiveType::HalfSpace:
+      return std::numeric_limits<double>::infinity();
+    case PrimitiveType::Box:
+      return 8.0 * as<Box>()->halfSize.prod();
     case PrimitiveType::Cylinder: {
       const Cylinder& s = *as<Cylinder>();
       return kPi * s.radius * s.radius * s.height;
@@ -291,7 +384,8 @@ double Primitive::volume() const {
 
 double Primitive::surfaceArea() const {
   switch (type()) {
-    case PrimitiveType::HalfSpace: return std::numeric_limits<double>::infinity();
+    case PrimitiveType::HalfSpace:
+      return std::numeric_limits<double>::infinity();
     case PrimitiveType::Box: {
       const Vec3& h = as<Box>()->halfSize;
       return 8.0 * (h.x() * h.y() + h.y() * h.z() + h.x() * h.z());
@@ -415,15 +509,11 @@ bool Primitive::approxEqual(const Primitive& other, double tol) const {
 }
 
 std::string_view primitiveTypeName(PrimitiveType type) {
-  switch (type) {
-    case PrimitiveType::HalfSpace: return "halfspace";
-    case PrimitiveType::Box: return "box";
-    case PrimitiveType::Cylinder: return "cylinder";
-    case PrimitiveType::Cone: return "cone";
-    case PrimitiveType::Sphere: return "sphere";
-    case PrimitiveType::Torus: return "torus";
-  }
-  return "unknown";
+  // In the order of PrimitiveType.
+  static constexpr std::array<std::string_view, 6> kNames = {"halfspace", "box",    "cylinder",
+                                                             "cone",      "sphere", "torus"};
+  const auto i = static_cast<std::size_t>(type);
+  return i < kNames.size() ? kNames[i] : "unknown";
 }
 
 PrimitiveType primitiveTypeFromName(std::string_view name) {

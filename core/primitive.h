@@ -5,11 +5,13 @@
 /// The gradient of f therefore points inwards; the outward surface normal is
 /// -grad f.
 
-#include "core/geometry.h"
-
+#include <cstddef>
+#include <span>
 #include <string>
 #include <string_view>
 #include <variant>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 
@@ -66,14 +68,14 @@ using PrimitiveShape = std::variant<HalfSpace, Box, Cylinder, Cone, Sphere, Toru
 /// A solid primitive: a shape with its exact signed distance field.
 class Primitive {
  public:
-  Primitive() = default;  ///< the half-space z <= 0
+  Primitive() = default;                                         ///< the half-space z <= 0
   Primitive(PrimitiveShape shape) : shape_(std::move(shape)) {}  // NOLINT: implicit by design
-  Primitive(HalfSpace s) : shape_(s) {}                           // NOLINT
-  Primitive(Box s) : shape_(s) {}                                 // NOLINT
-  Primitive(Cylinder s) : shape_(s) {}                            // NOLINT
-  Primitive(Cone s) : shape_(s) {}                                // NOLINT
-  Primitive(Sphere s) : shape_(s) {}                              // NOLINT
-  Primitive(Torus s) : shape_(s) {}                               // NOLINT
+  Primitive(HalfSpace s) : shape_(s) {}                          // NOLINT
+  Primitive(Box s) : shape_(s) {}                                // NOLINT
+  Primitive(Cylinder s) : shape_(s) {}                           // NOLINT
+  Primitive(Cone s) : shape_(s) {}                               // NOLINT
+  Primitive(Sphere s) : shape_(s) {}                             // NOLINT
+  Primitive(Torus s) : shape_(s) {}                              // NOLINT
 
   PrimitiveType type() const { return static_cast<PrimitiveType>(shape_.index()); }
   const PrimitiveShape& shape() const { return shape_; }
@@ -86,7 +88,11 @@ class Primitive {
   /// Signed distance at p: >= 0 inside, < 0 outside.
   double value(const Vec3& p) const;
   /// Signed distance at p and its gradient (unit length almost everywhere).
+  /// The value is bit for bit that of value(p).
   double valueAndGradient(const Vec3& p, Vec3& gradient) const;
+  /// out[i] = value(points[i]) (bit for bit), one loop over the points.
+  /// @throw std::invalid_argument when the spans differ in size.
+  void values(std::span<const Vec3> points, std::span<double> out) const;
 
   /// Tight axis-aligned bounds; unbounded for a half-space.
   Aabb bounds() const;
@@ -105,6 +111,9 @@ class Primitive {
   /// units for lengths, in radians-ish units for unit vectors).
   bool approxEqual(const Primitive& other, double tolerance) const;
   bool operator==(const Primitive& other) const { return approxEqual(other, 0.0); }
+  /// A hash of the type and parameters: primitives equal by approxEqual(other,
+  /// 0) hash equal (-0 and +0 hash alike).
+  std::size_t hash() const;
 
  private:
   PrimitiveShape shape_;

@@ -14,6 +14,7 @@ class MinMax final : public SetOperations {
     return b.f > a.f ? b : a;
   }
   std::string_view name() const override { return "minmax"; }
+  SetOperationKind kind() const override { return SetOperationKind::MinMax; }
 };
 
 class RFunction final : public SetOperations {
@@ -25,6 +26,7 @@ class RFunction final : public SetOperations {
     return combine(a, b, 1.0);
   }
   std::string_view name() const override { return "rfunction"; }
+  SetOperationKind kind() const override { return SetOperationKind::RFunction; }
 
  private:
   static FieldValue combine(const FieldValue& a, const FieldValue& b, double sign) {
@@ -54,8 +56,10 @@ const SetOperations& rFunctionOperations() {
 
 const SetOperations& setOperations(SetOperationKind kind) {
   switch (kind) {
-    case SetOperationKind::MinMax: return minMaxOperations();
-    case SetOperationKind::RFunction: return rFunctionOperations();
+    case SetOperationKind::MinMax:
+      return minMaxOperations();
+    case SetOperationKind::RFunction:
+      return rFunctionOperations();
   }
   return minMaxOperations();
 }

@@ -19,10 +19,41 @@ bool isIdentifier(const std::string& s) {
 
 }  // namespace
 
+bool isOpenScadReserved(const std::string& name) {
+  // OpenSCAD's keywords, constants and built-in modules and functions (its
+  // language manual and cheat sheet, up to release 2021.01, plus the
+  // deprecated and the internal ones it still accepts). A module of one of
+  // these names would not parse or would replace the built-in that the other
+  // modules call.
+  static const std::set<std::string, std::less<>> reserved = {
+      // keywords and constants
+      "module", "function", "include", "use", "if", "else", "for", "intersection_for", "let",
+      "each", "assert", "echo", "assign", "true", "false", "undef", "PI", "inf", "nan",
+      // 3D and 2D primitives
+      "cube", "sphere", "cylinder", "polyhedron", "circle", "square", "polygon", "text", "import",
+      "import_stl", "import_off", "import_dxf", "surface", "roof",
+      // transformations and operations
+      "translate", "rotate", "scale", "resize", "mirror", "multmatrix", "color", "offset", "hull",
+      "minkowski", "union", "difference", "intersection", "render", "projection", "linear_extrude",
+      "rotate_extrude", "dxf_linear_extrude", "dxf_rotate_extrude", "children", "child", "group",
+      "parent_module", "fill",
+      // functions
+      "abs", "sign", "sin", "cos", "tan", "acos", "asin", "atan", "atan2", "floor", "round", "ceil",
+      "ln", "len", "log", "pow", "sqrt", "exp", "rands", "min", "max", "concat", "lookup", "str",
+      "chr", "ord", "search", "version", "version_num", "norm", "cross", "is_undef", "is_bool",
+      "is_num", "is_string", "is_list", "is_function", "is_object", "dxf_dim", "dxf_cross",
+      "object", "textmetrics", "fontmetrics"};
+  return reserved.count(name) > 0;
+}
+
 std::unordered_map<const Node*, std::string> leafNames(const CsgTree& tree) {
   std::unordered_map<const Node*, std::string> names;
   std::set<std::string> used;
   std::map<std::string, int> counters;
+  // OpenSCAD's own names are never given out (a leaf named so gets a suffix).
+  for (const Node* leaf : tree.leaves()) {
+    if (isOpenScadReserved(leaf->name)) used.insert(leaf->name);
+  }
   const auto fresh = [&](const std::string& base, bool numberFirst) {
     std::string candidate = numberFirst ? base + std::to_string(++counters[base]) : base;
     while (used.count(candidate)) candidate = base + "_" + std::to_string(++counters[base + "_"]);

@@ -3,8 +3,9 @@
 /// on a narrow band of voxels around its surface and the zero set is
 /// polygonised with OpenVDB.
 
-#include "core/triangle_mesh.h"
 #include "core/csg_tree.h"
+#include "core/progress.h"
+#include "core/triangle_mesh.h"
 
 namespace csgvox {
 
@@ -25,12 +26,22 @@ struct MeshOptions {
 /// it (or with adaptivity > 0) every sharp edge is chamfered by about a voxel,
 /// which costs about 1 % of the area of a box at the default resolution.
 /// Assumes the field is 1-Lipschitz (true for the exact primitive distances
-/// combined with min/max), which lets it skip voxels far from the surface.
-/// Runs in parallel (TBB).
+/// combined with min/max), which lets it skip voxels far from the surface and
+/// evaluate only the primitives that can change the field near each part of
+/// the surface (the tree is pruned over a hierarchy of lattice blocks), so
+/// trees with many leaves mesh in about the time of their surface. The result
+/// is the same as evaluating the whole tree everywhere.
+/// Runs in parallel (TBB). `progress`, when set, hears the stages "cull",
+/// "sample", "polygonise" and "sharpen" (from worker threads, one call at a
+/// time); returning false stops the meshing.
 /// @throw std::invalid_argument when the tree is empty or invalid, its bounds
 ///        are empty or unbounded (e.g. a bare half-space or a complement),
-///        `resolution` is outside [8, 2048], `adaptivity` outside [0, 1], or
-///        the estimated memory exceeds `memoryLimitMiB`.
-TriangleMesh meshTree(const CsgTree& tree, const MeshOptions& options = {});
+///        a primitive is too large to mesh (coordinates beyond 1e30) or the
+///        solid too small for the resolution (voxels below 1.5e-5; the message
+///        names the primitive), `resolution` is outside [8, 2048],
+///        `adaptivity` outside [0, 1], or the estimated memory exceeds
+///        `memoryLimitMiB`; std::runtime_error when `progress` asked to stop.
+TriangleMesh meshTree(const CsgTree& tree, const MeshOptions& options = {},
+                      const ProgressCallback& progress = {});
 
 }  // namespace csgvox

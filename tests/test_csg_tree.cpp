@@ -2,10 +2,6 @@
 // classification, bounds, structural equality, validation and the sharing of
 // immutable subtrees.
 
-#include "core/csg_tree.h"
-
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,7 +10,14 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
+
+#include "core/csg_tree.h"
+#include "core/tree_program.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -453,6 +456,268 @@ TEST(CsgTree, EditsShareSubtreesAndLeaveTheOldTreeUnchanged) {
   const CsgTree copy = edited;
   EXPECT_EQ(copy.root(), edited.root());
   EXPECT_TRUE(copy == edited);
+}
+
+// ---------------------------------------------------------------------------
+// Value-only and batched evaluation.
+
+// Points in the tree's bounds grown by a quarter on each side, plus points on
+// and near the surface (the edge-crossing and sharpening paths of the mesher).
+std::vector<Vec3> probePoints(const CsgTree& tree, Rng& rng, int count) {
+  const Aabb b = tree.bounds();
+  const Aabb box = test::grown(b, 0.25 * b.size().maxCoeff());
+  std::vector<Vec3> points;
+  for (int i = 0; i < count; ++i) points.push_back(test::randomPoint(rng, box));
+  return points;
+}
+
+TEST(TreeEvaluation, ValueIsBitForBitTheEvaluatedValueOnTheBundledTrees) {
+  Rng rng(21);
+  for (const std::string& part : test::partNames()) {
+    const CsgTree tree = readTreeJson(test::dataDir() / part / "tree.json");
+    const std::vector<Vec3> points = probePoints(tree, rng, 20000);
+    for (const SetOperationKind kind : {SetOperationKind::MinMax, SetOperationKind::RFunction}) {
+      const SetOperations& ops = setOperations(kind);
+      std::vector<double> batched(points.size());
+      tree.values(points, batched, kind);
+      const TreeProgram program(tree);
+      std::size_t mismatches = 0;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const double reference = tree.evaluate(points[i], ops).f;  // the gradient path
+        mismatches += tree.value(points[i], ops) != reference;
+        mismatches += batched[i] != reference;
+        if (kind == SetOperationKind::MinMax) {
+          mismatches += program.value(points[i]) != reference;
+          const FieldValue v = program.evaluate(points[i]);
+          const FieldValue w = tree.evaluate(points[i]);
+          mismatches += v.f != w.f || v.gradient != w.gradient;
+        }
+      }
+      EXPECT_EQ(mismatches, 0u) << part << " with " << ops.name();
+    }
+  }
+}
+
+TEST(TreeEvaluation, BatchedValuesMatchOnRandomTreesAndOddSizes) {
+  Rng rng(22);
+  for (int t = 0; t < 30; ++t) {
+    const CsgTree tree = test::randomTree(rng, 1 + t % 9);
+    // Sizes around the internal chunk length, and an empty batch.
+    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{255}, std::size_t{256},
+                                std::size_t{257}, std::size_t{1000}}) {
+      std::vector<Vec3> points;
+      for (std::size_t i = 0; i < n; ++i) {
+        points.push_back(test::randomPoint(rng, Aabb{Vec3::Constant(-5), Vec3::Constant(5)}));
+      }
+      std::vector<double> out(n, 12345.0);
+      tree.values(points, out);
+      for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out[i], tree.value(points[i])) << t;
+    }
+  }
+  std::vector<double> empty(1);
+  CsgTree().values(std::vector<Vec3>{Vec3::Zero()}, empty);
+  EXPECT_EQ(empty[0], -std::numeric_limits<double>::infinity());
+  std::vector<double> tooShort(1);
+  EXPECT_THROW(plateWithHoles().values(std::vector<Vec3>(2), tooShort), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------
+// Restriction of a program to a region.
+
+TEST(TreeProgram, RestrictedProgramsAreExactBelowTheirThreshold) {
+  Rng rng(24);
+  std::size_t exact = 0, clamped = 0;
+  for (int t = 0; t < 60; ++t) {
+    const CsgTree tree = test::randomTree(rng, 2 + t % 12);
+    const TreeProgram full(tree);
+    for (int r = 0; r < 10; ++r) {
+      const Vec3 c = test::randomPoint(rng, Aabb{Vec3::Constant(-4), Vec3::Constant(4)});
+      const Vec3 half(test::uniform(rng, 0.05, 1.5), test::uniform(rng, 0.05, 1.5),
+                      test::uniform(rng, 0.05, 1.5));
+      const Aabb region{c - half, c + half};
+      const double threshold = test::uniform(rng, 0.05, 1.0);
+      const TreeProgram local = full.restricted(region, threshold);
+      EXPECT_LE(local.leafCount(), full.leafCount());
+      // A second restriction with a lower threshold keeps the promise too.
+      const TreeProgram inner = local.restricted(region, 0.5 * threshold);
+      for (int i = 0; i < 200; ++i) {
+        const Vec3 p = test::randomPoint(rng, region);
+        const double f = full.value(p);
+        const double g = local.value(p);
+        if (std::abs(f) < threshold) {
+          ASSERT_EQ(g, f);
+          const FieldValue a = local.evaluate(p), b = tree.evaluate(p);
+          ASSERT_EQ(a.f, b.f);
+          ASSERT_EQ(a.gradient, b.gradient);
+          ++exact;
+        } else {
+          ASSERT_GE(std::abs(g), threshold) << f << " " << g;
+          ASSERT_EQ(g > 0.0, f > 0.0);
+          ++clamped;
+        }
+        const double h = inner.value(p);
+        if (std::abs(f) < 0.5 * threshold) {
+          ASSERT_EQ(h, f);
+        } else {
+          ASSERT_GE(std::abs(h), 0.5 * threshold);
+          ASSERT_EQ(h > 0.0, f > 0.0);
+        }
+      }
+    }
+  }
+  EXPECT_GT(exact, 1000u);  // both branches were exercised
+  EXPECT_GT(clamped, 1000u);
+}
+
+TEST(TreeProgram, RestrictionKeepsOnlyTheLeavesNearTheRegion) {
+  // A union of 1000 unit-spaced small spheres minus a slab: near one sphere
+  // only that sphere and the slab matter.
+  std::vector<CsgTree> spheres;
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) {
+      for (int k = 0; k < 10; ++k) spheres.push_back(CsgTree::leaf(Sphere{Vec3(i, j, k), 0.3}));
+    }
+  }
+  const CsgTree tree = CsgTree::subtract(
+      {CsgTree::unite(spheres),
+       CsgTree::leaf(Box{Vec3(4.5, 4.5, 20), Mat3::Identity(), Vec3(10, 10, 10.2)})});
+  const TreeProgram full(tree);
+  EXPECT_EQ(full.leafCount(), 1001u);
+  const Aabb nearOne{Vec3(2.8, 3.8, 4.8), Vec3(3.2, 4.2, 5.2)};
+  const TreeProgram local = full.restricted(nearOne, 0.2);
+  EXPECT_EQ(local.leafCount(), 1u);  // the slab is far above: only the sphere at (3, 4, 5)
+  const Aabb atTheSlab{Vec3(2.8, 3.8, 9.3), Vec3(3.2, 4.2, 9.7)};  // sphere top and slab
+  EXPECT_EQ(full.restricted(atTheSlab, 0.2).leafCount(), 2u);
+  // Far from everything: a constant.
+  const TreeProgram empty = full.restricted(Aabb{Vec3(30, 30, 30), Vec3(31, 31, 31)}, 0.5);
+  EXPECT_TRUE(empty.isConstant());
+  EXPECT_EQ(empty.value(Vec3(30.5, 30.5, 30.5)), -0.5);
+  EXPECT_THROW(full.restricted(nearOne, 0.0), std::invalid_argument);
+  EXPECT_THROW(local.restricted(nearOne, 0.3), std::invalid_argument);  // above its own
+  EXPECT_THROW(full.restricted(Aabb{}, 1.0), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------
+// Leaf payloads, subtree replacement and structural hashing.
+
+TEST(CsgTreeNodes, OperationNodesCarryNoPrimitive) {
+  // A node is smaller than the primitive it may refer to: it cannot hold one.
+  EXPECT_LT(sizeof(Node), sizeof(Primitive));
+  const CsgTree leaf = CsgTree::leaf(Sphere{Vec3(1, 2, 3), 4}, "ball");
+  EXPECT_EQ(leaf.root()->primitive, Primitive(Sphere{Vec3(1, 2, 3), 4}));
+  EXPECT_EQ(leaf.root()->name, "ball");
+  const CsgTree u = CsgTree::unite({leaf, leaf});
+  EXPECT_EQ(u.root()->name, "");
+  EXPECT_THROW(Node(NodeKind::Primitive, {}), std::invalid_argument);
+}
+
+TEST(CsgTreeEdits, ReplaceSubtreeByPathSharesTheRest) {
+  const CsgTree t = plateWithHoles();  // difference(union(plate, boss), hole1, hole2, hole3)
+  const CsgTree peg = CsgTree::leaf(Cylinder{Vec3(0, 1, 0), Vec3::UnitZ(), 0.2, 2}, "peg");
+  const CsgTree edited = t.replaceSubtree(NodePath{2}, peg);
+  EXPECT_EQ(edited.root()->children[2], peg.root());
+  EXPECT_EQ(edited.root()->children[0], t.root()->children[0]);  // shared, not copied
+  EXPECT_EQ(edited.root()->children[1], t.root()->children[1]);
+  EXPECT_EQ(edited.root()->children[3], t.root()->children[3]);
+  EXPECT_EQ(edited.root()->kind, NodeKind::Difference);
+  EXPECT_EQ(t.nodeAt(NodePath{2})->name, "hole2");  // the original is unchanged
+  // Deeper: the boss inside the union; the plate stays shared.
+  const CsgTree boss2 = t.replaceSubtree(NodePath{0, 1}, peg);
+  EXPECT_EQ(boss2.nodeAt(NodePath{0, 1}), peg.root());
+  EXPECT_EQ(boss2.nodeAt(NodePath{0, 0}), t.nodeAt(NodePath{0, 0}));
+  EXPECT_NE(boss2.nodeAt(NodePath{0}), t.nodeAt(NodePath{0}));
+  EXPECT_EQ(boss2.primitiveCount(), t.primitiveCount());
+  // The root itself.
+  EXPECT_EQ(t.replaceSubtree(NodePath{}, peg).root(), peg.root());
+  EXPECT_THROW(t.replaceSubtree(NodePath{4}, peg), std::out_of_range);
+  EXPECT_THROW(t.replaceSubtree(NodePath{0, 0, 0}, peg), std::out_of_range);
+  EXPECT_THROW(t.replaceSubtree(NodePath{1}, CsgTree()), std::invalid_argument);
+  EXPECT_THROW(CsgTree().nodeAt(NodePath{}), std::out_of_range);
+}
+
+TEST(CsgTreeEdits, ReplaceSubtreeByNodeReplacesEveryUse) {
+  const CsgTree a = CsgTree::leaf(Sphere{Vec3::Zero(), 1}, "a");
+  const CsgTree b = CsgTree::leaf(Sphere{Vec3(3, 0, 0), 1}, "b");
+  const CsgTree c = CsgTree::leaf(Box{Vec3(0, 3, 0), Mat3::Identity(), Vec3(1, 1, 1)}, "c");
+  const CsgTree shared = CsgTree::unite({a, b});
+  const CsgTree t = CsgTree::subtract({CsgTree::intersect({shared, c}), shared});
+  const CsgTree r = t.replaceSubtree(a.root().get(), c);
+  EXPECT_TRUE(r == CsgTree::subtract(
+                       {CsgTree::intersect({CsgTree::unite({c, b}), c}), CsgTree::unite({c, b})}));
+  EXPECT_EQ(r.nodeAt(NodePath{0, 1}), c.root());
+  EXPECT_THROW(t.replaceSubtree(CsgTree::leaf(Sphere{}).root().get(), c), std::invalid_argument);
+  EXPECT_THROW(t.replaceSubtree(nullptr, c), std::invalid_argument);
+}
+
+// Rebuilds a tree node by node (no sharing with the original), renaming leaves.
+CsgTree deepCopy(const Node& n) {
+  if (n.kind == NodeKind::Primitive) return CsgTree::leaf(n.primitive, n.name + "_copy");
+  std::vector<CsgTree> children;
+  for (const NodePtr& c : n.children) children.push_back(deepCopy(*c));
+  switch (n.kind) {
+    case NodeKind::Union:
+      return CsgTree::unite(children);
+    case NodeKind::Intersection:
+      return CsgTree::intersect(children);
+    case NodeKind::Difference:
+      return CsgTree::subtract(children);
+    default:
+      return CsgTree::complement(children.front());
+  }
+}
+
+TEST(CsgTreeHashing, EqualTreesHashEqualAndDifferentOnesRarelyCollide) {
+  Rng rng(25);
+  std::vector<CsgTree> trees;
+  for (int t = 0; t < 300; ++t) trees.push_back(test::randomTree(rng, 1 + t % 10));
+  std::unordered_map<CsgTree, int, CsgTreeHash> cache;
+  for (std::size_t i = 0; i < trees.size(); ++i) {
+    const CsgTree copy = deepCopy(*trees[i].root());
+    ASSERT_NE(copy.root(), trees[i].root());
+    ASSERT_TRUE(copy == trees[i]);
+    EXPECT_EQ(copy.structuralHash(), trees[i].structuralHash());
+    cache[trees[i]] = static_cast<int>(i);
+    EXPECT_EQ(cache.at(copy), static_cast<int>(i));  // a copy finds the cached entry
+    // Replacing any subtree by itself gives an equal tree, hash included.
+    const std::vector<const Node*> leaves = trees[i].leaves();
+    const Node* leaf = leaves[i % leaves.size()];
+    const CsgTree same = trees[i].replaceSubtree(leaf, CsgTree::leaf(leaf->primitive));
+    EXPECT_EQ(same.structuralHash(), trees[i].structuralHash());
+    // Moving one leaf by a hair changes the tree and, here, its hash.
+    Primitive moved = leaf->primitive;
+    if (const auto* s = moved.as<Sphere>()) {
+      moved = Sphere{s->center + Vec3(1e-12, 0, 0), s->radius};
+    } else {
+      moved = Sphere{Vec3(1, 2, 3), 0.5};
+    }
+    const CsgTree other = trees[i].replaceSubtree(leaf, CsgTree::leaf(moved));
+    EXPECT_FALSE(other == trees[i]);
+    EXPECT_NE(other.structuralHash(), trees[i].structuralHash());
+  }
+  // Distinct trees: pairwise, equal hashes only for equal trees (no collision
+  // among these 300).
+  std::size_t collisions = 0;
+  for (std::size_t i = 0; i < trees.size(); ++i) {
+    for (std::size_t j = i + 1; j < trees.size(); ++j) {
+      const bool equal = trees[i] == trees[j];
+      const bool sameHash = trees[i].structuralHash() == trees[j].structuralHash();
+      if (equal) {
+        EXPECT_TRUE(sameHash);
+      }
+      collisions += sameHash && !equal;
+    }
+  }
+  EXPECT_EQ(collisions, 0u);
+  // Order, kind and arity matter; names and the sign of zero do not.
+  const CsgTree a = CsgTree::leaf(Sphere{Vec3(0.0, 1, 2), 1}, "a");
+  const CsgTree a0 = CsgTree::leaf(Sphere{Vec3(-0.0, 1, 2), 1}, "other name");
+  const CsgTree b = CsgTree::leaf(Sphere{Vec3(1, 1, 2), 1});
+  EXPECT_TRUE(a == a0);
+  EXPECT_EQ(a.structuralHash(), a0.structuralHash());
+  EXPECT_NE(CsgTree::unite({a, b}).structuralHash(), CsgTree::unite({b, a}).structuralHash());
+  EXPECT_NE(CsgTree::unite({a, b}).structuralHash(), CsgTree::intersect({a, b}).structuralHash());
+  EXPECT_NE(CsgTree::unite({a}).structuralHash(), a.structuralHash());
+  EXPECT_EQ(CsgTree().structuralHash(), 0u);
 }
 
 }  // namespace

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "io/errors.h"
+#include "io/mesh_files.h"
 #include "mesh/mesh_export.h"
 #include "mesh/mesh_solid.h"
-#include "io/mesh_files.h"
 #include "test_helpers.h"
 
 namespace csgvox {
@@ -332,6 +332,122 @@ TEST(MeshTree, RefusesToExceedTheMemoryLimit) {
   options = MeshOptions{};
   options.resolution = 2048;
   expectThrowWith<std::invalid_argument>([&] { meshTree(CsgTree::unite(fins), options); }, "MiB");
+}
+
+TEST(MeshTree, RejectsPrimitivesThatCannotBeMeshedNamingThem) {
+  // Too large for single-precision vertices (was: an STL with 0 triangles or
+  // with -inf coordinates), too small for OpenVDB's transform (was OpenVDB's
+  // "ArithmeticError: Non-zero scale values required").
+  const CsgTree base = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(1, 1, 1)}, "base");
+  for (const double radius : {1e300, 1e40}) {
+    expectThrowWith<std::invalid_argument>(
+        [&] {
+          meshTree(CsgTree::unite({base, CsgTree::leaf(Sphere{Vec3::Zero(), radius}, "ball")}));
+        },
+        "sphere 'ball' (leaf 2");
+    expectThrowWith<std::invalid_argument>(
+        [&] {
+          meshTree(CsgTree::leaf(Sphere{Vec3::Zero(), radius}));
+        },
+        "too large");
+  }
+  expectThrowWith<std::invalid_argument>(
+      [&] {
+        meshTree(CsgTree::leaf(Sphere{Vec3::Zero(), 1e-30}));
+      },
+      "sphere (leaf 1 in depth-first order) is too small for the mesh resolution");
+  // A part far out of range is refused too, not only a large one.
+  expectThrowWith<std::invalid_argument>(
+      [&] {
+        meshTree(CsgTree::leaf(Sphere{Vec3(1e31, 0, 0), 1}));
+      },
+      "too large");
+  // Small but representable parts still mesh.
+  const Primitive small = Sphere{Vec3(1, 2, 3), 0.01};
+  MeshOptions options;
+  options.resolution = 64;
+  const TriangleMesh mesh = meshTree(CsgTree::leaf(small), options);
+  EXPECT_LT(relativeError(mesh.volume(), small.volume()), 0.01);
+}
+
+// n^3 spheres of radius r on a unit grid, with names.
+CsgTree sphereLattice(int n, double r) {
+  std::vector<CsgTree> spheres;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      for (int k = 0; k < n; ++k) spheres.push_back(CsgTree::leaf(Sphere{Vec3(i, j, k), r}));
+    }
+  }
+  return CsgTree::unite(spheres);
+}
+
+TEST(MeshTree, UnionOfTenThousandSpheresMeshesLikeTheSpheres) {
+  // 22^3 = 10648 disjoint spheres. The mesher evaluates only the spheres near
+  // each block of voxels (this took about two minutes when every voxel
+  // evaluated every sphere).
+  const int n = 22;
+  const double r = 0.35;
+  const CsgTree tree = sphereLattice(n, r);
+  const MeshOptions options;  // 160: about 2.5 voxels per radius
+  std::vector<std::string> stages;
+  double last = -1.0;
+  bool monotone = true;
+  const TriangleMesh mesh = meshTree(tree, options, [&](double fraction, std::string_view stage) {
+    if (stages.empty() || stages.back() != stage) {
+      stages.emplace_back(stage);
+      last = -1.0;
+    }
+    monotone = monotone && fraction >= last && fraction <= 1.0;
+    last = fraction;
+    return true;
+  });
+  EXPECT_TRUE(mesh.isClosed());
+  const double sphereVolume = 4.0 / 3.0 * kPi * r * r * r;
+  // Spheres 2.5 voxels in radius: within a few percent.
+  EXPECT_LT(relativeError(mesh.volume(), n * n * n * sphereVolume), 0.05);
+  EXPECT_EQ(stages, (std::vector<std::string>{"cull", "sample", "polygonise", "sharpen"}));
+  EXPECT_TRUE(monotone);
+  // Every vertex lies on the surface of one of the spheres.
+  double worst = 0.0;
+  for (const Vec3& v : mesh.vertices) {
+    const Vec3 c = v.array().round();
+    worst = std::max(worst, std::abs((v - c).norm() - r));
+  }
+  EXPECT_LT(worst, 0.1 * r);  // a voxel is 0.4 r
+}
+
+TEST(MeshTree, PrunedMeshingGivesTheSameMeshAsTheWholeTree) {
+  // The same solid with 400 far-off leaves that cannot reach the surface
+  // subtracted: each is dropped where it cannot matter, and the mesh is the
+  // same, vertex for vertex.
+  const CsgTree part = sphereLattice(3, 0.4);
+  std::vector<CsgTree> operands = {part};
+  for (int i = 0; i < 400; ++i) {
+    operands.push_back(CsgTree::leaf(Sphere{Vec3(0.5, 0.5, 0.5) + 0.001 * Vec3(i, 0, 0), 0.01}));
+  }
+  const CsgTree withTools = CsgTree::subtract(operands);
+  MeshOptions options;
+  options.resolution = 96;
+  const TriangleMesh a = meshTree(part, options);
+  const TriangleMesh b = meshTree(withTools, options);
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  ASSERT_EQ(a.triangles.size(), b.triangles.size());
+  EXPECT_TRUE(a.vertices == b.vertices);
+  EXPECT_TRUE(a.triangles == b.triangles);
+}
+
+TEST(MeshTree, ProgressCanStopTheMeshing) {
+  const CsgTree tree = sphereLattice(4, 0.3);
+  int calls = 0;
+  expectThrowWith<std::runtime_error>(
+      [&] {
+        meshTree(tree, {}, [&](double, std::string_view stage) {
+          ++calls;
+          return stage != "sample";
+        });
+      },
+      "cancelled");
+  EXPECT_GT(calls, 0);
 }
 
 // ---------------------------------------------------------------------------

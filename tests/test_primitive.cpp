@@ -2,10 +2,6 @@
 // distance (brute force against parametric surface samples), gradients,
 // classification, bounds, volume and area, validation and equality.
 
-#include "core/primitive.h"
-
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +10,9 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "core/primitive.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -577,6 +576,28 @@ TEST(PrimitiveType, MatchesShapeAlternative) {
   ASSERT_NE(p.as<Sphere>(), nullptr);
   EXPECT_EQ(p.as<Sphere>()->radius, 4.0);
   EXPECT_EQ(p.as<Torus>(), nullptr);
+}
+
+TEST(PrimitiveValue, ValueOnlyAndBatchedPathsGiveTheGradientPathsValues) {
+  Rng rng(23);
+  for (const PrimitiveType type : test::allPrimitiveTypes()) {
+    for (int k = 0; k < 20; ++k) {
+      const Primitive prim = test::randomPrimitive(type, rng);
+      std::vector<Vec3> points;
+      for (int i = 0; i < 500; ++i) {
+        points.push_back(test::randomPoint(rng, Aabb{Vec3::Constant(-4), Vec3::Constant(4)}));
+      }
+      points.push_back(prim.bounds().isBounded() ? prim.bounds().center() : Vec3::Zero());
+      std::vector<double> out(points.size());
+      prim.values(points, out);
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        Vec3 g;
+        const double f = prim.valueAndGradient(points[i], g);
+        ASSERT_EQ(prim.value(points[i]), f) << primitiveTypeName(type);
+        ASSERT_EQ(out[i], f) << primitiveTypeName(type);
+      }
+    }
+  }
 }
 
 }  // namespace

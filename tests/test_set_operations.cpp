@@ -2,11 +2,6 @@
 // keep the same zero set, their values follow the closed forms and their
 // gradients match finite differences.
 
-#include "core/set_operations.h"
-
-#include "core/csg_tree.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +9,10 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "core/csg_tree.h"
+#include "core/set_operations.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -36,6 +35,22 @@ TEST(SetOperations, KindsAndNames) {
   EXPECT_EQ(&setOperations(SetOperationKind::RFunction), &rFunctionOperations());
   EXPECT_EQ(minMaxOperations().name(), "minmax");
   EXPECT_EQ(rFunctionOperations().name(), "rfunction");
+  EXPECT_EQ(minMaxOperations().kind(), SetOperationKind::MinMax);
+  EXPECT_EQ(rFunctionOperations().kind(), SetOperationKind::RFunction);
+}
+
+TEST(SetOperations, ValueOnlyFormsGiveTheSameValuesBitForBit) {
+  Rng rng(11);
+  for (int i = 0; i < 10000; ++i) {
+    FieldValue a = randomField(rng), b = randomField(rng);
+    if (i % 10 == 0) b.f = a.f;     // ties
+    if (i % 10 == 1) a.f = 0.0;     // zero operands
+    if (i % 10 == 2) b.f = -1e200;  // far values
+    ASSERT_EQ(MinMaxValues::unite(a.f, b.f), minMaxOperations().unite(a, b).f);
+    ASSERT_EQ(MinMaxValues::intersect(a.f, b.f), minMaxOperations().intersect(a, b).f);
+    ASSERT_EQ(RFunctionValues::unite(a.f, b.f), rFunctionOperations().unite(a, b).f);
+    ASSERT_EQ(RFunctionValues::intersect(a.f, b.f), rFunctionOperations().intersect(a, b).f);
+  }
 }
 
 TEST(MinMaxOperations, AreMinAndMaxWithTheWinnersGradient) {
