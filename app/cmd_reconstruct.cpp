@@ -112,15 +112,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
             [&](std::string_view stage, bool done, const std::string& summary) {
               if (done) console.info(std::string(stage) + ": " + summary);
             },
-            [&, last = console.elapsed()](double fraction, std::string_view step) mutable {
-              // A line every few seconds while a stage runs long.
-              if (console.elapsed() - last >= 3.0) {
-                last = console.elapsed();
-                console.info("  " + std::string(step) + " " +
-                             std::to_string(int(100.0 * fraction)) + " %");
-              }
-              return true;
-            });
+            console.progress());
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
     if (rec.timeLimitHit) {
@@ -142,7 +134,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     writeTreeText(output.path("tree.txt"), tree);
     MeshOptions mo;
     mo.resolution = opt->meshResolution;
-    writeMesh(output.path("mesh.ply"), meshTree(tree, mo));
+    writeMesh(output.path("mesh.ply"), meshTree(tree, mo, console.progress()));
     timings["export"] = watch.seconds();
 
     // The tree is the result: a metric that cannot be computed is a warning

@@ -48,7 +48,7 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
     if (ext == "ply" || ext == "stl" || ext == "obj") {
       MeshOptions mo;
       mo.resolution = opt->resolution;
-      const TriangleMesh mesh = meshTree(tree, mo);
+      const TriangleMesh mesh = meshTree(tree, mo, console.progress());
       char buf[256];
       std::snprintf(buf, sizeof(buf), "meshed at res %d: %zu vertices, %zu triangles in %.2f s",
                     opt->resolution, mesh.vertices.size(), mesh.triangles.size(), watch.seconds());

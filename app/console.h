@@ -1,8 +1,11 @@
 #pragma once
 /// Progress and timing lines on stderr for the command-line tool.
 
+#include "core/progress.h"
+
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 namespace csgvox::app {
@@ -19,6 +22,18 @@ class Console {
     if (!quiet_) std::fprintf(stderr, "[%7.2f s] %s\n", elapsed(), message.c_str());
   }
   bool quiet() const { return quiet_; }
+  /// A progress callback for a long step: a line "  STEP NN %" every
+  /// `everySeconds` while the step runs. Never cancels.
+  ProgressCallback progress(double everySeconds = 3.0) const {
+    auto last = std::make_shared<double>(elapsed());
+    return [this, last, everySeconds](double fraction, std::string_view step) {
+      if (elapsed() - *last >= everySeconds) {
+        *last = elapsed();
+        info("  " + std::string(step) + " " + std::to_string(int(100.0 * fraction)) + " %");
+      }
+      return true;
+    };
+  }
 
  private:
   bool quiet_;
