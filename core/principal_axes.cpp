@@ -21,7 +21,6 @@ PrincipalAxes analyse(std::size_t n, PointAt at) {
   // Eigen sorts the eigenvalues in increasing order.
   for (int k = 0; k < 3; ++k) pa.axes.col(k) = eig.eigenvectors().col(2 - k);
   pa.variances = eig.eigenvalues().reverse();
-  if (pa.axes.determinant() < 0.0) pa.axes.col(2) = -pa.axes.col(2);
   return pa;
 }
 

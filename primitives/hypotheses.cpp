@@ -4,8 +4,6 @@
 
 #include "primitives/hypotheses.h"
 
-#include "primitives/hypotheses_internal.h"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -13,6 +11,9 @@
 #include <stdexcept>
 #include <string>
 #include <variant>
+
+#include "primitives/bounding_box.h"
+#include "primitives/hypotheses_internal.h"
 
 namespace csgvox {
 
@@ -96,6 +97,10 @@ Rectangle2 minAreaRectangle(std::vector<Eigen::Vector2d> pts) {
     }
   }
   return best;
+}
+
+Mat3 searchedBoxFrame(std::span<const Vec3> points, std::uint32_t seed) {
+  return minimalBoxFrame(points, MinimalBoxOptions{seed, kBoxSearchPoints});
 }
 
 Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges) {
@@ -230,7 +235,7 @@ void scanScale(const PointCloud& scan, std::uint32_t seed, double& diagonal, dou
   const std::size_t step = std::max<std::size_t>(1, scan.size() / 20000);
   std::vector<Vec3> subset;
   for (std::size_t i = 0; i < scan.size(); i += step) subset.push_back(scan.points[i]);
-  const Mat3 frame = orientedBoundingFrame(subset, seed);
+  const Mat3 frame = searchedBoxFrame(subset, seed);
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   for (const Vec3& p : scan.points) {
     const Vec3 q = frame.transpose() * p;

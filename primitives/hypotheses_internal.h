@@ -2,12 +2,12 @@
 /// Internal to the hypothesis generator (hypotheses.cpp, cuboid_hypotheses.cpp,
 /// quadric_hypotheses.cpp): shared helpers. Not part of the public API.
 
-#include "primitives/hypotheses.h"
-
 #include <array>
 #include <span>
 #include <unordered_map>
 #include <vector>
+
+#include "primitives/hypotheses.h"
 
 namespace csgvox::hypotheses_detail {
 
@@ -55,11 +55,13 @@ Rectangle2 minAreaRectangle(std::vector<Eigen::Vector2d> points);
 /// (coordinates along the frame's axes).
 Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges);
 
+/// The minimal box's orientation is searched on at most this many points.
+inline constexpr std::size_t kBoxSearchPoints = 300;
+
 /// Axes (columns, right-handed) of the minimal oriented bounding box of the
-/// points (CGAL optimal_bounding_box, seeded, on at most 300 evenly spread
-/// points); the principal axes when the points are (nearly) coplanar or
-/// fewer than four.
-Mat3 orientedBoundingFrame(std::span<const Vec3> points, std::uint32_t seed);
+/// points: minimalBoxFrame with `seed`, searched on kBoxSearchPoints evenly
+/// spread points.
+Mat3 searchedBoxFrame(std::span<const Vec3> points, std::uint32_t seed);
 
 /// The inlier positions of a surface.
 std::vector<Vec3> inlierPoints(const PointCloud& scan, const Surface& surface);

@@ -1,13 +1,9 @@
 #include "primitives/surface_detection.h"
 
-#include "core/nearest_neighbors.h"
-#include "primitives/surface_refinement.h"
-
 #include <CGAL/Random.h>
 #include <CGAL/Shape_detection/Efficient_RANSAC.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/property_map.h>
-#include <Eigen/Eigenvalues>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -22,6 +18,11 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "core/nearest_neighbors.h"
+#include "core/principal_axes.h"
+#include "core/statistics.h"
+#include "primitives/surface_refinement.h"
+
 namespace csgvox {
 namespace {
 
@@ -31,9 +32,10 @@ using CVector = Kernel::Vector_3;
 // Efficient_RANSAC reorders its input, so each point carries its scan index.
 using Pwn = std::tuple<CPoint, CVector, std::uint32_t>;
 using PwnRange = std::vector<Pwn>;
-using Traits = CGAL::Shape_detection::Efficient_RANSAC_traits<
-    Kernel, PwnRange, CGAL::Nth_of_tuple_property_map<0, Pwn>,
-    CGAL::Nth_of_tuple_property_map<1, Pwn>>;
+using Traits =
+    CGAL::Shape_detection::Efficient_RANSAC_traits<Kernel, PwnRange,
+                                                   CGAL::Nth_of_tuple_property_map<0, Pwn>,
+                                                   CGAL::Nth_of_tuple_property_map<1, Pwn>>;
 using Ransac = CGAL::Shape_detection::Efficient_RANSAC<Traits>;
 using CgalPlane = CGAL::Shape_detection::Plane<Traits>;
 using CgalCylinder = CGAL::Shape_detection::Cylinder<Traits>;
@@ -75,24 +77,6 @@ std::vector<std::uint32_t> strideSubset(std::size_t n, std::size_t count) {
   return out;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-// Eigen-decomposition of the covariance of the points.
-Eigen::SelfAdjointEigenSolver<Mat3> pointCovariance(const std::vector<Vec3>& points) {
-  Vec3 mean = Vec3::Zero();
-  for (const Vec3& p : points) mean += p;
-  mean /= double(points.size());
-  Mat3 cov = Mat3::Zero();
-  for (const Vec3& p : points) cov += (p - mean) * (p - mean).transpose();
-  cov /= double(points.size());
-  return Eigen::SelfAdjointEigenSolver<Mat3>(cov);
-}
-
 // Majority vote: true when most normals point along the outward direction
 // returned by `outward(i)` for inlier i.
 template <class Outward>
@@ -105,8 +89,7 @@ bool majorityOutward(const PointCloud& cloud, const std::vector<std::uint32_t>& 
 
 // Converts a CGAL shape into a Surface on the scan's points; returns false for
 // shapes that are not plausible features of a part of diagonal D.
-bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double diag,
-                  Surface& out) {
+bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double diag, Surface& out) {
   const auto finite = [](const Vec3& v) { return v.allFinite(); };
   if (const auto* s = dynamic_cast<const CgalPlane*>(&shape)) {
     Vec3 n = toVec(s->plane_normal());
@@ -168,7 +151,8 @@ bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double di
     const Vec3 centre = toVec(s->center());
     const double r = s->radius();
     if (!finite(centre) || !(r > 0.0) || !(r <= diag)) return false;
-    out.convex = majorityOutward(cloud, out.inliers, [&](const Vec3& p) { return Vec3(p - centre); });
+    out.convex =
+        majorityOutward(cloud, out.inliers, [&](const Vec3& p) { return Vec3(p - centre); });
     out.shape = SphereSurface{centre, r};
     return true;
   }
@@ -201,8 +185,7 @@ std::string degeneracy(const PointCloud& cloud, double diag) {
     return "only " + std::to_string(cloud.size()) + " point(s): at least 3 are needed";
   }
   if (!(diag > 0.0)) return "all points are identical";
-  const auto eig = pointCovariance(cloud.points);
-  const Vec3 sd = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
+  const Vec3 sd = principalAxes(cloud.points).variances.cwiseMax(0.0).cwiseSqrt();  // descending
   char buf[160];
   if (sd[1] < 1e-6 * diag) {
     std::snprintf(buf, sizeof(buf),
@@ -210,11 +193,11 @@ std::string degeneracy(const PointCloud& cloud, double diag) {
                   100.0 * sd[1] / diag);
     return buf;
   }
-  if (sd[0] < 1e-4 * diag) {
+  if (sd[2] < 1e-4 * diag) {
     std::snprintf(buf, sizeof(buf),
                   "all points lie in one plane (thickness %.2g %% of the diagonal): not the "
                   "scan of a solid",
-                  100.0 * sd[0] / diag);
+                  100.0 * sd[2] / diag);
     return buf;
   }
   return {};
@@ -247,8 +230,8 @@ void validate(const PointCloud& cloud, const DetectOptions& o) {
 // writes its own slot, so the result does not depend on the scheduling.
 // Returns false when cancelled.
 bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subset,
-                const std::set<SurfaceType>& types, const Ransac::Parameters& params, unsigned int seed,
-                double diag, const std::function<bool(double)>& callback,
+                const std::set<SurfaceType>& types, const Ransac::Parameters& params,
+                unsigned int seed, double diag, const std::function<bool(double)>& callback,
                 const std::function<bool(Surface&)>& accept, std::vector<Surface>& found) {
   if (subset.size() < params.min_points || subset.size() < 10) return true;
   PwnRange input;
@@ -282,7 +265,8 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
       std::optional<Surface>& slot = slots.emplace_back();
       tasks.run([&, shape = *it, &slot = slot]() {
         Surface s;
-        for (std::size_t local : shape->indices_of_assigned_points()) s.inliers.push_back(scanIndex[local]);
+        for (std::size_t local : shape->indices_of_assigned_points())
+          s.inliers.push_back(scanIndex[local]);
         std::sort(s.inliers.begin(), s.inliers.end());
         if (s.inliers.size() < params.min_points) return;
         if (!convertShape(*shape, cloud, diag, s) || !accept(s)) return;
@@ -318,11 +302,16 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
 // Simplicity of a surface type: its number of parameters.
 int complexity(SurfaceType type) {
   switch (type) {
-    case SurfaceType::Plane: return 3;
-    case SurfaceType::Sphere: return 4;
-    case SurfaceType::Cylinder: return 5;
-    case SurfaceType::Cone: return 6;
-    case SurfaceType::Torus: return 7;
+    case SurfaceType::Plane:
+      return 3;
+    case SurfaceType::Sphere:
+      return 4;
+    case SurfaceType::Cylinder:
+      return 5;
+    case SurfaceType::Cone:
+      return 6;
+    case SurfaceType::Torus:
+      return 7;
   }
   return 8;
 }
@@ -332,13 +321,16 @@ int complexity(SurfaceType type) {
 bool plausible(const Surface& s, double diag) {
   constexpr double kMinAngle = 2.0 * std::numbers::pi / 180.0;
   switch (s.type()) {
-    case SurfaceType::Plane: return true;
-    case SurfaceType::Cylinder: return s.as<CylinderSurface>()->radius <= diag;
+    case SurfaceType::Plane:
+      return true;
+    case SurfaceType::Cylinder:
+      return s.as<CylinderSurface>()->radius <= diag;
     case SurfaceType::Cone: {
       const double a = s.as<ConeSurface>()->halfAngle;
       return a >= kMinAngle && a <= 0.5 * std::numbers::pi - kMinAngle;
     }
-    case SurfaceType::Sphere: return s.as<SphereSurface>()->radius <= diag;
+    case SurfaceType::Sphere:
+      return s.as<SphereSurface>()->radius <= diag;
     case SurfaceType::Torus: {
       const auto& t = *s.as<TorusSurface>();
       return t.majorRadius <= diag && t.minorRadius <= t.majorRadius;
@@ -458,10 +450,14 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
 
 std::string_view detectionStatusName(DetectionResult::Status status) {
   switch (status) {
-    case DetectionResult::Status::Ok: return "ok";
-    case DetectionResult::Status::NoSurfaces: return "no surfaces";
-    case DetectionResult::Status::DegenerateInput: return "degenerate input";
-    case DetectionResult::Status::Cancelled: return "cancelled";
+    case DetectionResult::Status::Ok:
+      return "ok";
+    case DetectionResult::Status::NoSurfaces:
+      return "no surfaces";
+    case DetectionResult::Status::DegenerateInput:
+      return "degenerate input";
+    case DetectionResult::Status::Cancelled:
+      return "cancelled";
   }
   return "unknown";
 }
@@ -482,10 +478,7 @@ double estimateNoise(const PointCloud& cloud, const NearestNeighbors& nn, int ne
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       nn.kNearest(cloud.points[sample[s]], k + 1, idx, &d2);
-      std::vector<Vec3> local;
-      local.reserve(idx.size());
-      for (std::uint32_t i : idx) local.push_back(cloud.points[i]);
-      rms[s] = std::sqrt(std::max(0.0, pointCovariance(local).eigenvalues()[0]));
+      rms[s] = std::sqrt(std::max(0.0, principalAxes(cloud.points, idx).variances[2]));
       radius[s] = std::sqrt(d2.back());
     });
     const double m = double(k + 1), nu = m - 3.0;
@@ -577,10 +570,9 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
   result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
   result.normalNoise = estimateNormalNoise(cloud, nn);
   const double spacing = estimateSpacing(cloud, nn);
-  result.epsilon = std::max(options.epsilon * diag,
-                            std::min(options.noiseFactor * result.noise, options.maxEpsilon * diag));
-  result.clusterEpsilon =
-      std::max(options.clusterEpsilon * diag, options.spacingFactor * spacing);
+  result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,
+                                                             options.maxEpsilon * diag));
+  result.clusterEpsilon = std::max(options.clusterEpsilon * diag, options.spacingFactor * spacing);
   std::size_t minPoints = std::max<std::size_t>(
       options.minPointsFloor, std::size_t(std::lround(options.minPoints * double(cloud.size()))));
   result.minPoints = minPoints;
@@ -633,7 +625,9 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     params.cluster_epsilon = result.clusterEpsilon;
     params.normal_threshold = options.normalThreshold;
     const double span = 0.9 / double(stages.size()), base = 0.05 + span * double(stage);
-    const std::function<bool(double)> cb = [&](double f) { return report(base + span * f, "ransac"); };
+    const std::function<bool(double)> cb = [&](double f) {
+      return report(base + span * f, "ransac");
+    };
     const std::function<bool(Surface&)> accept = [&](Surface& surf) {
       return selectModel(cloud, options, scales, result.epsilon, diag, surf);
     };
