@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "primitives/hypotheses.h"
+#include "primitives/min_area_rectangle.h"
 
 namespace csgvox::hypotheses_detail {
 
@@ -40,16 +41,6 @@ struct Range {
 /// of a uniformly sampled region (n·sigma / (range·sqrt(2 pi))). With
 /// sigma = 0, the exact min and max. `values` must not be empty.
 Range robustRange(std::vector<double> values, double sigma);
-
-/// Minimum-area bounding rectangle of 2D points: the unit direction of its
-/// longer side and its side lengths (length >= width).
-struct Rectangle2 {
-  Eigen::Vector2d direction{1.0, 0.0};
-  double length = 0.0;
-  double width = 0.0;
-};
-/// Minimum-area rectangle by rotating calipers over the convex hull.
-Rectangle2 minAreaRectangle(std::vector<Eigen::Vector2d> points);
 
 /// The box with unit axes `frame` (columns, right-handed) spanning `ranges`
 /// (coordinates along the frame's axes).

@@ -202,7 +202,7 @@ Box axialMinimalBox(const Quadric& q) {
   std::vector<Eigen::Vector2d> uv;
   uv.reserve(q.points.size());
   for (const Vec3& p : q.points) uv.emplace_back(p.dot(f.col(0)), p.dot(f.col(1)));
-  const Rectangle2 rect = minAreaRectangle(std::move(uv));
+  const Rectangle2 rect = minAreaRectangle(uv);
   Mat3 frame;
   frame.col(0) = rect.direction.x() * f.col(0) + rect.direction.y() * f.col(1);
   frame.col(2) = q.axis;

@@ -522,6 +522,106 @@ double estimateSpacing(const PointCloud& cloud, const NearestNeighbors& nn) {
   return median(std::move(dist));
 }
 
+// Scale-free parameters: relative to D (result.diagonal), raised to what the
+// noise and the sampling density require.
+void setScales(const PointCloud& cloud, const DetectOptions& options, DetectionResult& result) {
+  const double diag = result.diagonal;
+  const NearestNeighbors nn(cloud.points);
+  result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
+  result.normalNoise = estimateNormalNoise(cloud, nn);
+  const double spacing = estimateSpacing(cloud, nn);
+  result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,
+                                                             options.maxEpsilon * diag));
+  result.clusterEpsilon = std::max(options.clusterEpsilon * diag, options.spacingFactor * spacing);
+  result.minPoints = std::max<std::size_t>(
+      options.minPointsFloor, std::size_t(std::lround(options.minPoints * double(cloud.size()))));
+}
+
+// One RANSAC pass: the surface types it looks for and its minimum support.
+struct Stage {
+  std::set<SurfaceType> types;
+  std::size_t minPoints;
+};
+
+// RANSAC stages. Staged: planes and cylinders first, then cones and spheres,
+// then tori, so that a flexible surface cannot claim the points of several
+// simpler ones (a torus over a hole and its countersink). Then later passes
+// with all types and fewer points for small features.
+std::vector<Stage> ransacStages(const DetectOptions& options, std::size_t minPoints) {
+  std::vector<Stage> stages;
+  if (options.staged) {
+    std::set<SurfaceType> sofar;
+    for (const auto& group : {std::set<SurfaceType>{SurfaceType::Plane, SurfaceType::Cylinder},
+                              std::set<SurfaceType>{SurfaceType::Cone, SurfaceType::Sphere},
+                              std::set<SurfaceType>{SurfaceType::Torus}}) {
+      bool added = false;
+      for (SurfaceType t : group) {
+        if (options.enabled.count(t) && sofar.insert(t).second) added = true;
+      }
+      if (added) stages.push_back({sofar, minPoints});
+    }
+  } else {
+    stages.push_back({options.enabled, minPoints});
+  }
+  for (int pass = 1; pass < options.passes; ++pass) {
+    minPoints = std::max<std::size_t>(
+        std::min<std::size_t>(options.minPointsFloor, minPoints),
+        std::size_t(std::lround(double(minPoints) * options.laterPassMinPoints)));
+    stages.push_back({options.enabled, minPoints});
+  }
+  return stages;
+}
+
+// Settles the surfaces found so far: drops redundant ones, gives every point
+// to the surface that explains it best, re-fits. `subset` becomes the
+// unassigned points, which later stages search.
+void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surface>& found,
+            std::vector<std::uint32_t>& subset) {
+  result.surfaces = std::move(found);
+  result.status = DetectionResult::Status::Ok;
+  RefineOptions settle;
+  settle.maxFitPoints = 3000;
+  // Points a surface's band reaches away from its patch stay with it until
+  // the final refinement: the later passes search the unassigned points
+  // for new surfaces, and stray noise is no help there.
+  settle.connectedPatches = false;
+  refineSurfaces(cloud, result, settle);
+  found = std::move(result.surfaces);
+  result.surfaces.clear();
+  subset.clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (result.assignment[i] < 0) subset.push_back(std::uint32_t(i));
+  }
+}
+
+// The final status and message of a detection.
+void summarise(const PointCloud& cloud, DetectionResult& result) {
+  const double diag = result.diagonal;
+  std::size_t assigned = 0;
+  std::array<int, 5> perType{};
+  for (const Surface& surf : result.surfaces) {
+    assigned += surf.inliers.size();
+    ++perType[std::size_t(surf.type())];
+  }
+  char buf[320];
+  if (result.surfaces.empty()) {
+    result.status = DetectionResult::Status::NoSurfaces;
+    std::snprintf(buf, sizeof(buf),
+                  "no surface explains %zu or more points within %.3g (%.2g %% of the diagonal; "
+                  "estimated noise %.3g)",
+                  result.minPoints, result.epsilon, 100.0 * result.epsilon / diag, result.noise);
+  } else {
+    result.status = DetectionResult::Status::Ok;
+    std::snprintf(buf, sizeof(buf),
+                  "%zu surfaces (%d planes, %d cylinders, %d cones, %d spheres, %d tori) explain "
+                  "%.1f %% of the points; epsilon %.3g (%.2g %% of D), estimated noise %.3g",
+                  result.surfaces.size(), perType[0], perType[1], perType[2], perType[3],
+                  perType[4], 100.0 * double(assigned) / double(cloud.size()), result.epsilon,
+                  100.0 * result.epsilon / diag, result.noise);
+  }
+  result.message = buf;
+}
+
 }  // namespace
 
 double estimateNoise(const PointCloud& cloud, int neighbors) {
@@ -564,18 +664,7 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
   }
   if (!report(0.0, "noise")) return cancelled();
 
-  // Scale-free parameters: relative to D, raised to what the noise and the
-  // sampling density require.
-  const NearestNeighbors nn(cloud.points);
-  result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
-  result.normalNoise = estimateNormalNoise(cloud, nn);
-  const double spacing = estimateSpacing(cloud, nn);
-  result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,
-                                                             options.maxEpsilon * diag));
-  result.clusterEpsilon = std::max(options.clusterEpsilon * diag, options.spacingFactor * spacing);
-  std::size_t minPoints = std::max<std::size_t>(
-      options.minPointsFloor, std::size_t(std::lround(options.minPoints * double(cloud.size()))));
-  result.minPoints = minPoints;
+  setScales(cloud, options, result);
 
   if (options.enabled.empty()) {
     result.status = Status::NoSurfaces;
@@ -583,36 +672,7 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     return result;
   }
 
-  // RANSAC stages. Staged: planes and cylinders first, then cones and spheres,
-  // then tori, so that a flexible surface cannot claim the points of several
-  // simpler ones (a torus over a hole and its countersink). Then later passes
-  // with all types and fewer points for small features.
-  struct Stage {
-    std::set<SurfaceType> types;
-    std::size_t minPoints;
-  };
-  std::vector<Stage> stages;
-  if (options.staged) {
-    std::set<SurfaceType> sofar;
-    for (const auto& group : {std::set<SurfaceType>{SurfaceType::Plane, SurfaceType::Cylinder},
-                              std::set<SurfaceType>{SurfaceType::Cone, SurfaceType::Sphere},
-                              std::set<SurfaceType>{SurfaceType::Torus}}) {
-      bool added = false;
-      for (SurfaceType t : group) {
-        if (options.enabled.count(t) && sofar.insert(t).second) added = true;
-      }
-      if (added) stages.push_back({sofar, minPoints});
-    }
-  } else {
-    stages.push_back({options.enabled, minPoints});
-  }
-  for (int pass = 1; pass < options.passes; ++pass) {
-    minPoints = std::max<std::size_t>(
-        std::min<std::size_t>(options.minPointsFloor, minPoints),
-        std::size_t(std::lround(double(minPoints) * options.laterPassMinPoints)));
-    stages.push_back({options.enabled, minPoints});
-  }
-
+  const std::vector<Stage> stages = ransacStages(options, result.minPoints);
   FitScales scales = fitScales(result);
   std::vector<Surface> found;
   std::vector<std::uint32_t> subset(cloud.size());
@@ -642,51 +702,13 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
         scales = fitScales(result);
       }
     }
-    // Settle the surfaces found so far: drop redundant ones, give every point
-    // to the surface that explains it best, re-fit. Later stages search the rest.
     result.minPoints = std::min(result.minPoints, stages[stage].minPoints);
-    result.surfaces = std::move(found);
-    result.status = Status::Ok;
-    RefineOptions settle;
-    settle.maxFitPoints = 3000;
-    // Points a surface's band reaches away from its patch stay with it until
-    // the final refinement: the later passes search the unassigned points
-    // for new surfaces, and stray noise is no help there.
-    settle.connectedPatches = false;
-    refineSurfaces(cloud, result, settle);
-    found = std::move(result.surfaces);
-    result.surfaces.clear();
-    subset.clear();
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      if (result.assignment[i] < 0) subset.push_back(std::uint32_t(i));
-    }
+    settle(cloud, result, found, subset);
   }
   if (!report(0.95, "ransac")) return cancelled();
 
   result.surfaces = std::move(found);
-  std::size_t assigned = 0;
-  std::array<int, 5> perType{};
-  for (const Surface& surf : result.surfaces) {
-    assigned += surf.inliers.size();
-    ++perType[std::size_t(surf.type())];
-  }
-  char buf[320];
-  if (result.surfaces.empty()) {
-    result.status = Status::NoSurfaces;
-    std::snprintf(buf, sizeof(buf),
-                  "no surface explains %zu or more points within %.3g (%.2g %% of the diagonal; "
-                  "estimated noise %.3g)",
-                  result.minPoints, result.epsilon, 100.0 * result.epsilon / diag, result.noise);
-  } else {
-    result.status = Status::Ok;
-    std::snprintf(buf, sizeof(buf),
-                  "%zu surfaces (%d planes, %d cylinders, %d cones, %d spheres, %d tori) explain "
-                  "%.1f %% of the points; epsilon %.3g (%.2g %% of D), estimated noise %.3g",
-                  result.surfaces.size(), perType[0], perType[1], perType[2], perType[3],
-                  perType[4], 100.0 * double(assigned) / double(cloud.size()), result.epsilon,
-                  100.0 * result.epsilon / diag, result.noise);
-  }
-  result.message = buf;
+  summarise(cloud, result);
   report(1.0, "ransac");
   return result;
 }
