@@ -312,21 +312,19 @@ class GroupEnumerator {
 // Plane patches, best supported first.
 std::vector<PlanePatch> planePatches(const Context& ctx) {
   std::vector<PlanePatch> patches;
-  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
-    const Surface& surface = ctx.surfaces[s];
-    const PlaneSurface* pl = surface.as<PlaneSurface>();
-    if (pl == nullptr || surface.inliers.size() < kMinInliers) continue;
+  for (const PlaneRef& ref : planeSurfaces(ctx)) {
+    const PlaneSurface* pl = ref.plane;
     PlanePatch p;
-    p.surface = static_cast<int>(s);
+    p.surface = static_cast<int>(ref.index);
     p.normal = pl->normal.normalized();
-    p.points = inlierPoints(ctx.scan, surface);
+    p.points = inlierPoints(ctx.scan, *ref.surface);
     p.centroid = Vec3::Zero();
     for (const Vec3& q : p.points) p.centroid += q;
     p.centroid /= static_cast<double>(p.points.size());
     // The centroid moved onto the fitted plane: the patch plane is exact.
     p.centroid -= (p.normal.dot(p.centroid) - pl->offset / pl->normal.norm()) * p.normal;
     p.support = static_cast<double>(p.points.size());
-    p.sigma = surface.rms;
+    p.sigma = ref.surface->rms;
     patches.push_back(std::move(p));
   }
   std::stable_sort(patches.begin(), patches.end(),

@@ -54,6 +54,18 @@ Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges) {
   return Box{frame * mid, frame, half};
 }
 
+std::vector<PlaneRef> planeSurfaces(const Context& ctx) {
+  std::vector<PlaneRef> planes;
+  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
+    const Surface& surface = ctx.surfaces[s];
+    const PlaneSurface* plane = surface.as<PlaneSurface>();
+    if (plane != nullptr && surface.inliers.size() >= kMinInliers) {
+      planes.push_back({s, &surface, plane});
+    }
+  }
+  return planes;
+}
+
 std::vector<Vec3> inlierPoints(const PointCloud& scan, const Surface& surface) {
   std::vector<Vec3> pts;
   pts.reserve(surface.inliers.size());
@@ -205,21 +217,11 @@ void checkOptions(const HypothesisOptions& o) {
 }  // namespace
 
 std::string_view candidateOriginName(CandidateOrigin origin) {
-  switch (origin) {
-    case CandidateOrigin::Cuboid:
-      return "cuboid";
-    case CandidateOrigin::Quadric:
-      return "quadric";
-    case CandidateOrigin::Plane:
-      return "plane";
-    case CandidateOrigin::Additional:
-      return "additional";
-    case CandidateOrigin::Indirect:
-      return "indirect";
-    case CandidateOrigin::Separator:
-      return "separator";
-  }
-  return "unknown";
+  // In the enum's order.
+  static constexpr std::array<std::string_view, kCandidateOriginCount> kNames{
+      "cuboid", "quadric", "plane", "additional", "indirect", "separator"};
+  const auto index = static_cast<std::size_t>(origin);
+  return index < kNames.size() ? kNames[index] : "unknown";
 }
 
 std::size_t OriginCounts::total() const {

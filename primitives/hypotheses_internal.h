@@ -54,6 +54,15 @@ inline constexpr std::size_t kBoxSearchPoints = 300;
 /// spread points.
 Mat3 searchedBoxFrame(std::span<const Vec3> points, std::uint32_t seed);
 
+/// A plane surface of the input, by index.
+struct PlaneRef {
+  std::size_t index = 0;                ///< index in Context::surfaces
+  const Surface* surface = nullptr;     ///< the surface
+  const PlaneSurface* plane = nullptr;  ///< its plane
+};
+/// The plane surfaces with at least kMinInliers inliers, in input order.
+std::vector<PlaneRef> planeSurfaces(const Context& ctx);
+
 /// The inlier positions of a surface.
 std::vector<Vec3> inlierPoints(const PointCloud& scan, const Surface& surface);
 

@@ -2,7 +2,6 @@
 
 #include <CGAL/Eigen_svd.h>
 #include <CGAL/Monge_via_jet_fitting.h>
-#include <CGAL/Simple_cartesian.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -18,13 +17,12 @@
 
 #include "core/nearest_neighbors.h"
 #include "core/principal_axes.h"
+#include "primitives/cgal_kernel.h"
 
 namespace csgvox {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point3 = Kernel::Point_3;
-using Vector3 = Kernel::Vector_3;
+using namespace cgal;  // Kernel, Point3, Vector3
 using JetFitting = CGAL::Monge_via_jet_fitting<Kernel, Kernel, CGAL::Eigen_svd>;
 
 // Closest point pairs that decide how a piece is oriented against the

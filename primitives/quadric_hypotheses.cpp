@@ -221,12 +221,11 @@ struct PlaneInfo {
 
 std::vector<PlaneInfo> planeInfos(const Context& ctx) {
   std::vector<PlaneInfo> planes;
-  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
-    const Surface& surface = ctx.surfaces[s];
-    const PlaneSurface* pl = surface.as<PlaneSurface>();
-    if (pl == nullptr || surface.inliers.size() < kMinInliers) continue;
+  for (const PlaneRef& ref : planeSurfaces(ctx)) {
+    const Surface& surface = *ref.surface;
+    const PlaneSurface* pl = ref.plane;
     PlaneInfo info;
-    info.surface = s;
+    info.surface = ref.index;
     info.normal = pl->normal.normalized();
     info.offset = pl->offset / pl->normal.norm();
     for (std::uint32_t i : surface.inliers) info.centroid += ctx.scan.points[i];

@@ -2,7 +2,6 @@
 
 #include <CGAL/Random.h>
 #include <CGAL/Shape_detection/Efficient_RANSAC.h>
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/property_map.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
@@ -21,14 +20,15 @@
 #include "core/nearest_neighbors.h"
 #include "core/principal_axes.h"
 #include "core/statistics.h"
+#include "primitives/cgal_kernel.h"
 #include "primitives/surface_refinement.h"
 
 namespace csgvox {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using CPoint = Kernel::Point_3;
-using CVector = Kernel::Vector_3;
+using cgal::Kernel;
+using CPoint = cgal::Point3;
+using CVector = cgal::Vector3;
 // Efficient_RANSAC reorders its input, so each point carries its scan index.
 using Pwn = std::tuple<CPoint, CVector, std::uint32_t>;
 using PwnRange = std::vector<Pwn>;
@@ -299,23 +299,6 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
   return true;
 }
 
-// Simplicity of a surface type: its number of parameters.
-int complexity(SurfaceType type) {
-  switch (type) {
-    case SurfaceType::Plane:
-      return 3;
-    case SurfaceType::Sphere:
-      return 4;
-    case SurfaceType::Cylinder:
-      return 5;
-    case SurfaceType::Cone:
-      return 6;
-    case SurfaceType::Torus:
-      return 7;
-  }
-  return 8;
-}
-
 // A plausible feature of a part of diagonal D: radii up to D, cones neither
 // nearly flat nor nearly cylindrical.
 bool plausible(const Surface& s, double diag) {
@@ -434,7 +417,7 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   for (std::size_t k = 0; k < candidates.size(); ++k) {
     const double score =
         selectionCost(cloud, shape.inliers, candidates[k], scales, eps, o.normalThreshold) +
-        complexity(candidates[k].type()) * logN;
+        parameterCount(candidates[k].type()) * logN;
     if (score < best) {
       best = score;
       chosen = int(k);

@@ -9,6 +9,7 @@
 #include <ceres/sphere_manifold.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -122,6 +123,20 @@ T radialPart(const T* w, const T* a, T* radial, double guard) {
   return rho;
 }
 
+// Of point p relative to `origin` on the unit axis a: its height z along the
+// axis, its unit radial direction, the unit tangent a x radial of the circle
+// about the axis through it and (returned) its distance from the axis.
+template <class T>
+T aroundAxis(const Vec3& p, const T* origin, const T* a, T& z, T* radial, T* tangent,
+             double guard) {
+  T w[3];
+  for (int i = 0; i < 3; ++i) w[i] = p[i] - origin[i];
+  z = w[0] * a[0] + w[1] * a[1] + w[2] * a[2];
+  const T rho = radialPart(w, a, radial, guard);
+  cross(a, radial, tangent);
+  return rho;
+}
+
 // The axis passes through base + s0*u + s1*v, with u, v perpendicular to the
 // start axis: two parameters for the axis position, none wasted along it.
 struct CylinderResidual {
@@ -142,15 +157,12 @@ struct ConeResidual {
   PointTerm t;
   template <class T>
   bool operator()(const T* apex, const T* a, const T* angle, T* r) const {
-    T w[3], radial[3], tangent[3], generator[3];
-    for (int i = 0; i < 3; ++i) w[i] = t.p[i] - apex[i];
-    const T z = w[0] * a[0] + w[1] * a[1] + w[2] * a[2];
-    const T rho = radialPart(w, a, radial, t.guard);
+    T z, radial[3], tangent[3], generator[3];
+    const T rho = aroundAxis(t.p, apex, a, z, radial, tangent, t.guard);
     using std::cos;
     using std::sin;
     const T c = cos(angle[0]), sn = sin(angle[0]);
     for (int i = 0; i < 3; ++i) generator[i] = sn * radial[i] + c * a[i];
-    cross(a, radial, tangent);
     t.write(rho * c - z * sn, generator, T(0.0), tangent, c / rho, r);
     return true;
   }
@@ -175,10 +187,8 @@ struct TorusResidual {
   PointTerm t;
   template <class T>
   bool operator()(const T* c, const T* a, const T* radii, T* r) const {
-    T w[3], radial[3], tangent[3], meridian[3];
-    for (int i = 0; i < 3; ++i) w[i] = t.p[i] - c[i];
-    const T z = w[0] * a[0] + w[1] * a[1] + w[2] * a[2];
-    const T rho = radialPart(w, a, radial, t.guard);
+    T z, radial[3], tangent[3], meridian[3];
+    const T rho = aroundAxis(t.p, c, a, z, radial, tangent, t.guard);
     // From the tube's centre circle to the point.
     T q[3];
     for (int i = 0; i < 3; ++i) q[i] = (rho - radii[0]) * radial[i] + z * a[i];
@@ -187,7 +197,6 @@ struct TorusResidual {
     const T len = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + T(t.guard));
     T normal[3];
     for (int i = 0; i < 3; ++i) normal[i] = q[i] / len;
-    cross(a, radial, tangent);
     cross(normal, tangent, meridian);
     const T cosPhi = normal[0] * radial[0] + normal[1] * radial[1] + normal[2] * radial[2];
     const T ring = radii[0] + radii[1] * cosPhi;
@@ -305,6 +314,11 @@ bool validSurface(const Surface& s) {
 }  // namespace refinement_detail
 
 using namespace refinement_detail;
+
+int parameterCount(SurfaceType type) {
+  static constexpr std::array<int, 5> kCounts{3, 5, 6, 4, 7};  // in SurfaceType's order
+  return kCounts[static_cast<std::size_t>(type)];
+}
 
 Vec3 surfaceNormal(const Surface& surface, const Vec3& p) {
   const Vec3 n = convexNormal(surface, p);

@@ -51,21 +51,6 @@ void removeRedundant(const PointCloud& cloud, DetectionResult& result,
   std::vector<Surface>& surfaces = result.surfaces;
   const double eps = result.epsilon;
   std::vector<char> alive(surfaces.size(), 1);
-  const auto complexityOf = [](SurfaceType t) {
-    switch (t) {
-      case SurfaceType::Plane:
-        return 0;
-      case SurfaceType::Sphere:
-        return 1;
-      case SurfaceType::Cylinder:
-        return 2;
-      case SurfaceType::Cone:
-        return 3;
-      case SurfaceType::Torus:
-        return 4;
-    }
-    return 5;
-  };
   const FitScales scales = fitScales(result, options);
   const double cap = std::pow(eps / scales.position, 2) + kNormalChi2;
   // Scaled squared residual of point i on surface t, or the cap when it is not on it.
@@ -132,11 +117,12 @@ void removeRedundant(const PointCloud& cloud, DetectionResult& result,
       }
       const std::size_t w = std::size_t(worst);
       const double tie = 0.25;  // in units of the scaled squared residual
-      const bool better = excess[s] > excess[w] + tie ||
-                          (excess[s] > excess[w] - tie &&
-                           (complexityOf(surfaces[s].type()) > complexityOf(surfaces[w].type()) ||
-                            (complexityOf(surfaces[s].type()) == complexityOf(surfaces[w].type()) &&
-                             surfaces[s].inliers.size() < surfaces[w].inliers.size())));
+      const bool better =
+          excess[s] > excess[w] + tie ||
+          (excess[s] > excess[w] - tie &&
+           (parameterCount(surfaces[s].type()) > parameterCount(surfaces[w].type()) ||
+            (parameterCount(surfaces[s].type()) == parameterCount(surfaces[w].type()) &&
+             surfaces[s].inliers.size() < surfaces[w].inliers.size())));
       if (better) worst = int(s);
     }
     if (worst < 0) break;
