@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <variant>
@@ -252,6 +253,161 @@ Vec3 convexNormal(const Surface& surface, const Vec3& p) {
   return Vec3::UnitZ();
 }
 
+// The parameter blocks of one surface fit (in doubles, as Ceres wants them)
+// and the problem over them.
+class SurfaceFit {
+ public:
+  SurfaceFit(const FitScales& scales, const Vec3& mean, double minLength)
+      : loss_(scales.loss / scales.position), mean_(mean), minLength_(minLength) {
+    ceres::Problem::Options problemOptions;
+    problemOptions.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problemOptions.manifold_ownership = ceres::TAKE_OWNERSHIP;
+    problem_ = std::make_unique<ceres::Problem>(problemOptions);
+  }
+
+  // Starts the blocks at `surface` and adds one residual per point.
+  template <class Term>
+  void build(const Surface& surface, std::span<const std::uint32_t> pts, const Term& term) {
+    ceres::Problem& problem = *problem_;
+    const Vec3& mean = mean_;
+    const double minLength = minLength_;
+    const auto setUnit = [](double* dst, const Vec3& src) {
+      const Vec3 n = src.normalized();
+      dst[0] = n.x(), dst[1] = n.y(), dst[2] = n.z();
+    };
+    switch (surface.type()) {
+      case SurfaceType::Plane: {
+        const auto& s = *surface.as<PlaneSurface>();
+        setUnit(a_, s.normal);
+        d_[0] = s.offset;
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(
+              new ceres::AutoDiffCostFunction<PlaneResidual, 3, 3, 1>(new PlaneResidual{term(i)}),
+              &loss_, a_, d_);
+        }
+        problem.SetManifold(a_, new ceres::SphereManifold<3>());
+        break;
+      }
+      case SurfaceType::Cylinder: {
+        const auto& s = *surface.as<CylinderSurface>();
+        setUnit(a_, s.axisDir);
+        const Vec3 axis(a_[0], a_[1], a_[2]);
+        base_ = s.axisPoint + (mean - s.axisPoint).dot(axis) * axis;
+        const Mat3 f = frameFromAxis(axis);
+        u_ = f.col(0), v_ = f.col(1);
+        d_[0] = std::max(s.radius, 2.0 * minLength);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CylinderResidual, 3, 3, 2, 1>(
+                                       new CylinderResidual{term(i), base_, u_, v_}),
+                                   &loss_, a_, c_, d_);
+        }
+        problem.SetManifold(a_, new ceres::SphereManifold<3>());
+        problem.SetParameterLowerBound(d_, 0, minLength);
+        break;
+      }
+      case SurfaceType::Cone: {
+        const auto& s = *surface.as<ConeSurface>();
+        b_[0] = s.apex.x(), b_[1] = s.apex.y(), b_[2] = s.apex.z();
+        setUnit(a_, s.axisDir);
+        d_[0] = std::clamp(s.halfAngle, 2e-3, 0.5 * std::numbers::pi - 2e-3);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(
+              new ceres::AutoDiffCostFunction<ConeResidual, 3, 3, 3, 1>(new ConeResidual{term(i)}),
+              &loss_, b_, a_, d_);
+        }
+        problem.SetManifold(a_, new ceres::SphereManifold<3>());
+        problem.SetParameterLowerBound(d_, 0, 1e-3);
+        problem.SetParameterUpperBound(d_, 0, 0.5 * std::numbers::pi - 1e-3);
+        break;
+      }
+      case SurfaceType::Sphere: {
+        const auto& s = *surface.as<SphereSurface>();
+        b_[0] = s.center.x(), b_[1] = s.center.y(), b_[2] = s.center.z();
+        d_[0] = std::max(s.radius, 2.0 * minLength);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(
+              new ceres::AutoDiffCostFunction<SphereResidual, 3, 3, 1>(new SphereResidual{term(i)}),
+              &loss_, b_, d_);
+        }
+        problem.SetParameterLowerBound(d_, 0, minLength);
+        break;
+      }
+      case SurfaceType::Torus: {
+        const auto& s = *surface.as<TorusSurface>();
+        b_[0] = s.center.x(), b_[1] = s.center.y(), b_[2] = s.center.z();
+        setUnit(a_, s.axisDir);
+        d_[0] = std::max(s.majorRadius, 2.0 * minLength),
+        d_[1] = std::max(s.minorRadius, 2.0 * minLength);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TorusResidual, 3, 3, 3, 2>(
+                                       new TorusResidual{term(i)}),
+                                   &loss_, b_, a_, d_);
+        }
+        problem.SetManifold(a_, new ceres::SphereManifold<3>());
+        problem.SetParameterLowerBound(d_, 0, minLength);
+        problem.SetParameterLowerBound(d_, 1, minLength);
+        break;
+      }
+    }
+  }
+
+  // Runs the solver for at most `iterations` iterations.
+  void solve(int iterations) {
+    ceres::Solver::Options solverOptions;
+    solverOptions.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+    solverOptions.max_num_iterations = iterations;
+    solverOptions.num_threads = 1;
+    solverOptions.logging_type = ceres::SILENT;
+    solverOptions.minimizer_progress_to_stdout = false;
+    solverOptions.function_tolerance = 1e-12;
+    solverOptions.parameter_tolerance = 1e-12;
+    solverOptions.gradient_tolerance = 1e-14;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solverOptions, problem_.get(), &summary);
+  }
+
+  // `surface` with the fitted parameters.
+  Surface result(const Surface& surface) const {
+    Surface out = surface;
+    const Vec3& mean = mean_;
+    const Vec3 axis = Vec3(a_[0], a_[1], a_[2]).normalized();
+    switch (surface.type()) {
+      case SurfaceType::Plane:
+        out.shape = PlaneSurface{axis, d_[0]};
+        break;
+      case SurfaceType::Cylinder: {
+        const Vec3 point = base_ + c_[0] * u_ + c_[1] * v_;
+        // Keep the axis point next to the inliers.
+        out.shape = CylinderSurface{point + (mean - point).dot(axis) * axis, axis, d_[0]};
+        break;
+      }
+      case SurfaceType::Cone:
+        out.shape = ConeSurface{Vec3(b_[0], b_[1], b_[2]), axis, d_[0]};
+        break;
+      case SurfaceType::Sphere:
+        out.shape = SphereSurface{Vec3(b_[0], b_[1], b_[2]), d_[0]};
+        break;
+      case SurfaceType::Torus: {
+        const Vec3 centre(b_[0], b_[1], b_[2]);
+        out.shape = TorusSurface{centre, axis, d_[0], d_[1]};
+        break;
+      }
+    }
+    return out;
+  }
+
+ private:
+  // Parameter blocks (at most three per type): a unit axis or normal, a point,
+  // an axis offset, sizes.
+  double a_[3] = {0, 0, 1}, b_[3] = {0, 0, 0}, c_[2] = {0, 0}, d_[2] = {0, 0};
+  // The cylinder's axis passes through base_ + c_[0] u_ + c_[1] v_.
+  Vec3 base_ = Vec3::Zero(), u_ = Vec3::UnitX(), v_ = Vec3::UnitY();
+  ceres::HuberLoss loss_;
+  std::unique_ptr<ceres::Problem> problem_;
+  Vec3 mean_;
+  double minLength_;
+};
+
 }  // namespace
 
 namespace refinement_detail {
@@ -396,7 +552,6 @@ double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indice
       evenSubset(indices, std::max<std::size_t>(16, options.maxFitPoints));
   if (pts.size() < 4) return -1.0;
   const PrincipalAxes spread = principalAxes(cloud.points, pts);
-  const Vec3& mean = spread.mean;
   const double extent2 = std::max(spread.covariance.trace(), 1e-300);
   const double guard = 1e-20 * extent2;
   const double minLength = 1e-6 * std::sqrt(extent2);  // radii stay positive
@@ -410,130 +565,10 @@ double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indice
                      guard};
   };
 
-  ceres::Problem::Options problemOptions;
-  problemOptions.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problemOptions.manifold_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(problemOptions);
-  ceres::HuberLoss loss(scales.loss / scales.position);
-
-  Surface out = surface;
-  // Parameter blocks (at most three), in doubles.
-  double a[3] = {0, 0, 1}, b[3] = {0, 0, 0}, c[2] = {0, 0}, d[2] = {0, 0};
-  Vec3 base = Vec3::Zero(), u = Vec3::UnitX(), v = Vec3::UnitY();
-  const auto setUnit = [](double* dst, const Vec3& src) {
-    const Vec3 n = src.normalized();
-    dst[0] = n.x(), dst[1] = n.y(), dst[2] = n.z();
-  };
-  switch (surface.type()) {
-    case SurfaceType::Plane: {
-      const auto& s = *surface.as<PlaneSurface>();
-      setUnit(a, s.normal);
-      d[0] = s.offset;
-      for (std::uint32_t i : pts) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<PlaneResidual, 3, 3, 1>(new PlaneResidual{term(i)}),
-            &loss, a, d);
-      }
-      problem.SetManifold(a, new ceres::SphereManifold<3>());
-      break;
-    }
-    case SurfaceType::Cylinder: {
-      const auto& s = *surface.as<CylinderSurface>();
-      setUnit(a, s.axisDir);
-      const Vec3 axis(a[0], a[1], a[2]);
-      base = s.axisPoint + (mean - s.axisPoint).dot(axis) * axis;
-      const Mat3 f = frameFromAxis(axis);
-      u = f.col(0), v = f.col(1);
-      d[0] = std::max(s.radius, 2.0 * minLength);
-      for (std::uint32_t i : pts) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CylinderResidual, 3, 3, 2, 1>(
-                                     new CylinderResidual{term(i), base, u, v}),
-                                 &loss, a, c, d);
-      }
-      problem.SetManifold(a, new ceres::SphereManifold<3>());
-      problem.SetParameterLowerBound(d, 0, minLength);
-      break;
-    }
-    case SurfaceType::Cone: {
-      const auto& s = *surface.as<ConeSurface>();
-      b[0] = s.apex.x(), b[1] = s.apex.y(), b[2] = s.apex.z();
-      setUnit(a, s.axisDir);
-      d[0] = std::clamp(s.halfAngle, 2e-3, 0.5 * std::numbers::pi - 2e-3);
-      for (std::uint32_t i : pts) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<ConeResidual, 3, 3, 3, 1>(new ConeResidual{term(i)}),
-            &loss, b, a, d);
-      }
-      problem.SetManifold(a, new ceres::SphereManifold<3>());
-      problem.SetParameterLowerBound(d, 0, 1e-3);
-      problem.SetParameterUpperBound(d, 0, 0.5 * std::numbers::pi - 1e-3);
-      break;
-    }
-    case SurfaceType::Sphere: {
-      const auto& s = *surface.as<SphereSurface>();
-      b[0] = s.center.x(), b[1] = s.center.y(), b[2] = s.center.z();
-      d[0] = std::max(s.radius, 2.0 * minLength);
-      for (std::uint32_t i : pts) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<SphereResidual, 3, 3, 1>(new SphereResidual{term(i)}),
-            &loss, b, d);
-      }
-      problem.SetParameterLowerBound(d, 0, minLength);
-      break;
-    }
-    case SurfaceType::Torus: {
-      const auto& s = *surface.as<TorusSurface>();
-      b[0] = s.center.x(), b[1] = s.center.y(), b[2] = s.center.z();
-      setUnit(a, s.axisDir);
-      d[0] = std::max(s.majorRadius, 2.0 * minLength),
-      d[1] = std::max(s.minorRadius, 2.0 * minLength);
-      for (std::uint32_t i : pts) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<TorusResidual, 3, 3, 3, 2>(new TorusResidual{term(i)}),
-            &loss, b, a, d);
-      }
-      problem.SetManifold(a, new ceres::SphereManifold<3>());
-      problem.SetParameterLowerBound(d, 0, minLength);
-      problem.SetParameterLowerBound(d, 1, minLength);
-      break;
-    }
-  }
-
-  ceres::Solver::Options solverOptions;
-  solverOptions.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solverOptions.max_num_iterations = options.maxIterations;
-  solverOptions.num_threads = 1;
-  solverOptions.logging_type = ceres::SILENT;
-  solverOptions.minimizer_progress_to_stdout = false;
-  solverOptions.function_tolerance = 1e-12;
-  solverOptions.parameter_tolerance = 1e-12;
-  solverOptions.gradient_tolerance = 1e-14;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solverOptions, &problem, &summary);
-
-  const Vec3 axis = Vec3(a[0], a[1], a[2]).normalized();
-  switch (surface.type()) {
-    case SurfaceType::Plane:
-      out.shape = PlaneSurface{axis, d[0]};
-      break;
-    case SurfaceType::Cylinder: {
-      const Vec3 point = base + c[0] * u + c[1] * v;
-      // Keep the axis point next to the inliers.
-      out.shape = CylinderSurface{point + (mean - point).dot(axis) * axis, axis, d[0]};
-      break;
-    }
-    case SurfaceType::Cone:
-      out.shape = ConeSurface{Vec3(b[0], b[1], b[2]), axis, d[0]};
-      break;
-    case SurfaceType::Sphere:
-      out.shape = SphereSurface{Vec3(b[0], b[1], b[2]), d[0]};
-      break;
-    case SurfaceType::Torus: {
-      const Vec3 centre(b[0], b[1], b[2]);
-      out.shape = TorusSurface{centre, axis, d[0], d[1]};
-      break;
-    }
-  }
+  SurfaceFit fit(scales, spread.mean, minLength);
+  fit.build(surface, pts, term);
+  fit.solve(options.maxIterations);
+  Surface out = fit.result(surface);
   if (!validSurface(out)) return -1.0;
   orientByNormals(cloud, indices, out);
   const double rms = rmsDistance(cloud, indices, out);
