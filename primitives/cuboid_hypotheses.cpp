@@ -3,11 +3,11 @@
 // frames (Eq. 2), the enumeration of one patch or none per direction (Eq. 3)
 // and the three filters.
 
-#include "primitives/hypotheses_internal.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "primitives/hypotheses_internal.h"
 
 namespace csgvox::hypotheses_detail {
 namespace {
@@ -91,7 +91,7 @@ Vec3 longerRectangleSide(const PlanePatch& patch) {
     const Vec3 d = p - patch.centroid;
     uv.emplace_back(d.dot(basis.col(0)), d.dot(basis.col(1)));
   }
-  const Rectangle2 rect = minAreaRectangle(std::move(uv));
+  const Rectangle2 rect = minAreaRectangle(uv);
   return rect.direction.x() * basis.col(0) + rect.direction.y() * basis.col(1);
 }
 
@@ -309,38 +309,36 @@ class GroupEnumerator {
   bool stop_ = false;
 };
 
-}  // namespace
-
-std::vector<Candidate> cuboidCandidates(const Context& ctx, CuboidStats& stats,
-                                        std::vector<char>& planeInCuboid) {
-  // Plane patches, best supported first.
+// Plane patches, best supported first.
+std::vector<PlanePatch> planePatches(const Context& ctx) {
   std::vector<PlanePatch> patches;
-  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
-    const Surface& surface = ctx.surfaces[s];
-    const PlaneSurface* pl = surface.as<PlaneSurface>();
-    if (pl == nullptr || surface.inliers.size() < kMinInliers) continue;
+  for (const PlaneRef& ref : planeSurfaces(ctx)) {
+    const PlaneSurface* pl = ref.plane;
     PlanePatch p;
-    p.surface = static_cast<int>(s);
+    p.surface = static_cast<int>(ref.index);
     p.normal = pl->normal.normalized();
-    p.points = inlierPoints(ctx.scan, surface);
+    p.points = inlierPoints(ctx.scan, *ref.surface);
     p.centroid = Vec3::Zero();
     for (const Vec3& q : p.points) p.centroid += q;
     p.centroid /= static_cast<double>(p.points.size());
     // The centroid moved onto the fitted plane: the patch plane is exact.
     p.centroid -= (p.normal.dot(p.centroid) - pl->offset / pl->normal.norm()) * p.normal;
     p.support = static_cast<double>(p.points.size());
-    p.sigma = surface.rms;
+    p.sigma = ref.surface->rms;
     patches.push_back(std::move(p));
   }
-  stats.planes = patches.size();
   std::stable_sort(patches.begin(), patches.end(),
                    [](const PlanePatch& a, const PlanePatch& b) { return a.support > b.support; });
+  return patches;
+}
 
-  // Direction sets: a patch joins the first set whose direction is parallel.
+// Direction sets: a patch joins the first set whose direction is parallel.
+std::vector<DirectionSet> directionSets(const std::vector<PlanePatch>& patches,
+                                        double cosParallel) {
   std::vector<DirectionSet> sets;
   for (std::size_t i = 0; i < patches.size(); ++i) {
     auto it = std::find_if(sets.begin(), sets.end(), [&](const DirectionSet& set) {
-      return std::abs(set.direction.dot(patches[i].normal)) >= ctx.cosParallel;
+      return std::abs(set.direction.dot(patches[i].normal)) >= cosParallel;
     });
     if (it == sets.end()) {
       sets.push_back({patches[i].normal, {}, 0.0});
@@ -349,13 +347,18 @@ std::vector<Candidate> cuboidCandidates(const Context& ctx, CuboidStats& stats,
     it->patches.push_back(i);
     it->support += patches[i].support;
   }
-  stats.directionSets = sets.size();
+  return sets;
+}
 
-  // Graph: an edge between orthogonal sets; cut into triangles, then edges,
-  // then single nodes, each time taking the best supported first.
+// Graph: an edge between orthogonal sets; cut into triangles, then edges,
+// then single nodes, each time taking the best supported first. Returns the
+// groups of sets, best supported first, so that a capped enumeration spends
+// its budget where the evidence is.
+std::vector<std::vector<std::size_t>> orthogonalGroups(const std::vector<DirectionSet>& sets,
+                                                       double sinOrthogonal, CuboidStats& stats) {
   const std::size_t m = sets.size();
   auto orthogonal = [&](std::size_t a, std::size_t b) {
-    return std::abs(sets[a].direction.dot(sets[b].direction)) <= ctx.sinOrthogonal;
+    return std::abs(sets[a].direction.dot(sets[b].direction)) <= sinOrthogonal;
   };
   auto supportOf = [&](const auto& nodes) {
     double s = 0.0;
@@ -401,10 +404,54 @@ std::vector<Candidate> cuboidCandidates(const Context& ctx, CuboidStats& stats,
       ++stats.singleGroups;
     }
   }
-  // Best supported groups first, so that a capped enumeration spends its
-  // budget where the evidence is.
   std::stable_sort(groups.begin(), groups.end(),
                    [&](const auto& x, const auto& y) { return supportOf(x) > supportOf(y); });
+  return groups;
+}
+
+// Patch `pi` in a group's frame: the frame axis nearest its normal, its
+// side, its plane and its robust extents along the frame's axes, and the
+// points (in frame coordinates) its faces are fitted to.
+GroupPatch groupPatch(const Context& ctx, const std::vector<PlanePatch>& patches, std::size_t pi,
+                      const Mat3& frame) {
+  const PlanePatch& p = patches[pi];
+  GroupPatch g;
+  g.patch = pi;
+  for (std::size_t k = 1; k < 3; ++k) {
+    if (std::abs(p.normal.dot(frame.col(static_cast<Eigen::Index>(k)))) >
+        std::abs(p.normal.dot(frame.col(static_cast<Eigen::Index>(g.axis))))) {
+      g.axis = k;
+    }
+  }
+  const Vec3 axis = frame.col(static_cast<Eigen::Index>(g.axis));
+  g.sign = p.normal.dot(axis) > 0.0 ? 1 : -1;
+  g.plane = p.centroid.dot(axis);
+  for (std::size_t k = 0; k < 3; ++k) {
+    std::vector<double> t;
+    t.reserve(p.points.size());
+    for (const Vec3& q : p.points) t.push_back(q.dot(frame.col(static_cast<Eigen::Index>(k))));
+    g.range[k] = robustRange(std::move(t), p.sigma);
+  }
+  g.range[g.axis] = {g.plane, g.plane};
+  g.support = p.support;
+  const std::size_t samples = std::max<std::size_t>(1, ctx.options.fitSamples);
+  const std::size_t step = std::max<std::size_t>(1, (p.points.size() + samples - 1) / samples);
+  for (std::size_t i = 0; i < p.points.size(); i += step) {
+    g.fitPoints.push_back(frame.transpose() * p.points[i]);
+  }
+  return g;
+}
+
+}  // namespace
+
+std::vector<Candidate> cuboidCandidates(const Context& ctx, CuboidStats& stats,
+                                        std::vector<char>& planeInCuboid) {
+  const std::vector<PlanePatch> patches = planePatches(ctx);
+  stats.planes = patches.size();
+  const std::vector<DirectionSet> sets = directionSets(patches, ctx.cosParallel);
+  stats.directionSets = sets.size();
+  const std::vector<std::vector<std::size_t>> groups =
+      orthogonalGroups(sets, ctx.sinOrthogonal, stats);
 
   std::vector<Candidate> out;
   std::size_t budgetUsed = 0;
@@ -417,36 +464,8 @@ std::vector<Candidate> cuboidCandidates(const Context& ctx, CuboidStats& stats,
                                       longerRectangleSide(patches[sets[group[0]].patches.front()]));
     std::vector<GroupPatch> local;
     for (std::size_t node : group) {
-      for (std::size_t pi : sets[node].patches) {
-        const PlanePatch& p = patches[pi];
-        GroupPatch g;
-        g.patch = pi;
-        for (std::size_t k = 1; k < 3; ++k) {
-          if (std::abs(p.normal.dot(frame.col(static_cast<Eigen::Index>(k)))) >
-              std::abs(p.normal.dot(frame.col(static_cast<Eigen::Index>(g.axis))))) {
-            g.axis = k;
-          }
-        }
-        const Vec3 axis = frame.col(static_cast<Eigen::Index>(g.axis));
-        g.sign = p.normal.dot(axis) > 0.0 ? 1 : -1;
-        g.plane = p.centroid.dot(axis);
-        for (std::size_t k = 0; k < 3; ++k) {
-          std::vector<double> t;
-          t.reserve(p.points.size());
-          for (const Vec3& q : p.points)
-            t.push_back(q.dot(frame.col(static_cast<Eigen::Index>(k))));
-          g.range[k] = robustRange(std::move(t), p.sigma);
-        }
-        g.range[g.axis] = {g.plane, g.plane};
-        g.support = p.support;
-        const std::size_t samples = std::max<std::size_t>(1, ctx.options.fitSamples);
-        const std::size_t step =
-            std::max<std::size_t>(1, (p.points.size() + samples - 1) / samples);
-        for (std::size_t i = 0; i < p.points.size(); i += step) {
-          g.fitPoints.push_back(frame.transpose() * p.points[i]);
-        }
-        local.push_back(std::move(g));
-      }
+      for (std::size_t pi : sets[node].patches)
+        local.push_back(groupPatch(ctx, patches, pi, frame));
     }
     GroupEnumerator enumerator(ctx, stats, patches, std::move(local), budgetUsed);
     for (const Hypothesis& h : enumerator.run()) {

@@ -4,8 +4,6 @@
 
 #include "primitives/hypotheses.h"
 
-#include "primitives/hypotheses_internal.h"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -13,6 +11,9 @@
 #include <stdexcept>
 #include <string>
 #include <variant>
+
+#include "primitives/bounding_box.h"
+#include "primitives/hypotheses_internal.h"
 
 namespace csgvox {
 
@@ -40,62 +41,8 @@ Range robustRange(std::vector<double> values, double sigma) {
   return r;
 }
 
-Rectangle2 minAreaRectangle(std::vector<Eigen::Vector2d> pts) {
-  using V2 = Eigen::Vector2d;
-  Rectangle2 best;
-  if (pts.empty()) return best;
-  // Andrew's monotone chain.
-  std::sort(pts.begin(), pts.end(), [](const V2& a, const V2& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  auto cross = [](const V2& o, const V2& a, const V2& b) {
-    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-  };
-  std::vector<V2> hull(2 * pts.size());
-  std::size_t k = 0;
-  for (const V2& p : pts) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p) <= 0.0) --k;
-    hull[k++] = p;
-  }
-  for (std::size_t i = pts.size() - 1, lower = k + 1; i-- > 0;) {
-    while (k >= lower && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0.0) --k;
-    hull[k++] = pts[i];
-  }
-  hull.resize(k > 1 ? k - 1 : k);
-  const std::size_t h = hull.size();
-  if (h < 2) return best;
-  // Rotating calipers over the counter-clockwise hull: for each edge, the
-  // vertices extreme along the edge (max and min) and farthest from it move
-  // forward monotonically as the edge turns.
-  auto at = [&](std::size_t i) -> const V2& { return hull[i % h]; };
-  double bestArea = std::numeric_limits<double>::infinity();
-  std::size_t jMax = 0, jMin = 0, jFar = 0;
-  for (std::size_t i = 0; i < h; ++i) {
-    V2 e = at(i + 1) - at(i);
-    const double len = e.norm();
-    if (len <= 0.0) continue;
-    e /= len;
-    const V2 n(-e.y(), e.x());  // points into the hull
-    if (i == 0) {
-      for (std::size_t q = 0; q < h; ++q) {
-        if (hull[q].dot(e) > hull[jMax].dot(e)) jMax = q;
-        if (hull[q].dot(e) < hull[jMin].dot(e)) jMin = q;
-        if (hull[q].dot(n) > hull[jFar].dot(n)) jFar = q;
-      }
-    } else {
-      for (std::size_t step = 0; step < h && at(jMax + 1).dot(e) > at(jMax).dot(e); ++step) ++jMax;
-      for (std::size_t step = 0; step < h && at(jFar + 1).dot(n) > at(jFar).dot(n); ++step) ++jFar;
-      for (std::size_t step = 0; step < h && at(jMin + 1).dot(e) < at(jMin).dot(e); ++step) ++jMin;
-    }
-    const double along = at(jMax).dot(e) - at(jMin).dot(e);
-    const double across = at(jFar).dot(n) - at(i).dot(n);
-    const double area = along * across;
-    if (area < bestArea * (1.0 - 1e-12)) {
-      bestArea = area;
-      best = along >= across ? Rectangle2{e, along, across} : Rectangle2{n, across, along};
-    }
-  }
-  return best;
+Mat3 searchedBoxFrame(std::span<const Vec3> points, std::uint32_t seed) {
+  return minimalBoxFrame(points, MinimalBoxOptions{seed, kBoxSearchPoints});
 }
 
 Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges) {
@@ -105,6 +52,18 @@ Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges) {
     half[k] = 0.5 * ranges[k].size();
   }
   return Box{frame * mid, frame, half};
+}
+
+std::vector<PlaneRef> planeSurfaces(const Context& ctx) {
+  std::vector<PlaneRef> planes;
+  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
+    const Surface& surface = ctx.surfaces[s];
+    const PlaneSurface* plane = surface.as<PlaneSurface>();
+    if (plane != nullptr && surface.inliers.size() >= kMinInliers) {
+      planes.push_back({s, &surface, plane});
+    }
+  }
+  return planes;
 }
 
 std::vector<Vec3> inlierPoints(const PointCloud& scan, const Surface& surface) {
@@ -230,7 +189,7 @@ void scanScale(const PointCloud& scan, std::uint32_t seed, double& diagonal, dou
   const std::size_t step = std::max<std::size_t>(1, scan.size() / 20000);
   std::vector<Vec3> subset;
   for (std::size_t i = 0; i < scan.size(); i += step) subset.push_back(scan.points[i]);
-  const Mat3 frame = orientedBoundingFrame(subset, seed);
+  const Mat3 frame = searchedBoxFrame(subset, seed);
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   for (const Vec3& p : scan.points) {
     const Vec3 q = frame.transpose() * p;
@@ -258,21 +217,11 @@ void checkOptions(const HypothesisOptions& o) {
 }  // namespace
 
 std::string_view candidateOriginName(CandidateOrigin origin) {
-  switch (origin) {
-    case CandidateOrigin::Cuboid:
-      return "cuboid";
-    case CandidateOrigin::Quadric:
-      return "quadric";
-    case CandidateOrigin::Plane:
-      return "plane";
-    case CandidateOrigin::Additional:
-      return "additional";
-    case CandidateOrigin::Indirect:
-      return "indirect";
-    case CandidateOrigin::Separator:
-      return "separator";
-  }
-  return "unknown";
+  // In the enum's order.
+  static constexpr std::array<std::string_view, kCandidateOriginCount> kNames{
+      "cuboid", "quadric", "plane", "additional", "indirect", "separator"};
+  const auto index = static_cast<std::size_t>(origin);
+  return index < kNames.size() ? kNames[index] : "unknown";
 }
 
 std::size_t OriginCounts::total() const {

@@ -32,16 +32,16 @@
 /// the scan's minimal oriented bounding box (not the axis-aligned one), so a
 /// rotated scan gives the same candidates, rotated.
 
-#include "core/csg_tree.h"
-#include "core/point_cloud.h"
-#include "core/surface.h"
-
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string_view>
 #include <vector>
+
+#include "core/csg_tree.h"
+#include "core/point_cloud.h"
+#include "core/surface.h"
 
 namespace csgvox {
 
@@ -99,8 +99,9 @@ struct HypothesisOptions {
   double quarterTolerance = 15.0;  ///< degrees; a cylinder patch of 90 +- this is a quarter
   bool extendToCaps = true;        ///< also cylinders extended to a cap past a chamfer
   bool snapToPlanes = true;        ///< cylinder ends onto the fitted planes that cap or cross them
-  bool extendOpenEnds = true;      ///< also cylinders run out to the scan's extent past ends on no plane
-  std::uint32_t seed = 1;          ///< seed of CGAL's bounding-box search
+  bool extendOpenEnds =
+      true;                ///< also cylinders run out to the scan's extent past ends on no plane
+  std::uint32_t seed = 1;  ///< seed of CGAL's bounding-box search
 };
 
 /// Candidate counts per origin (index: CandidateOrigin).

@@ -2,12 +2,13 @@
 /// Internal to the hypothesis generator (hypotheses.cpp, cuboid_hypotheses.cpp,
 /// quadric_hypotheses.cpp): shared helpers. Not part of the public API.
 
-#include "primitives/hypotheses.h"
-
 #include <array>
 #include <span>
 #include <unordered_map>
 #include <vector>
+
+#include "primitives/hypotheses.h"
+#include "primitives/min_area_rectangle.h"
 
 namespace csgvox::hypotheses_detail {
 
@@ -41,25 +42,26 @@ struct Range {
 /// sigma = 0, the exact min and max. `values` must not be empty.
 Range robustRange(std::vector<double> values, double sigma);
 
-/// Minimum-area bounding rectangle of 2D points: the unit direction of its
-/// longer side and its side lengths (length >= width).
-struct Rectangle2 {
-  Eigen::Vector2d direction{1.0, 0.0};
-  double length = 0.0;
-  double width = 0.0;
-};
-/// Minimum-area rectangle by rotating calipers over the convex hull.
-Rectangle2 minAreaRectangle(std::vector<Eigen::Vector2d> points);
-
 /// The box with unit axes `frame` (columns, right-handed) spanning `ranges`
 /// (coordinates along the frame's axes).
 Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges);
 
+/// The minimal box's orientation is searched on at most this many points.
+inline constexpr std::size_t kBoxSearchPoints = 300;
+
 /// Axes (columns, right-handed) of the minimal oriented bounding box of the
-/// points (CGAL optimal_bounding_box, seeded, on at most 300 evenly spread
-/// points); the principal axes when the points are (nearly) coplanar or
-/// fewer than four.
-Mat3 orientedBoundingFrame(std::span<const Vec3> points, std::uint32_t seed);
+/// points: minimalBoxFrame with `seed`, searched on kBoxSearchPoints evenly
+/// spread points.
+Mat3 searchedBoxFrame(std::span<const Vec3> points, std::uint32_t seed);
+
+/// A plane surface of the input, by index.
+struct PlaneRef {
+  std::size_t index = 0;                ///< index in Context::surfaces
+  const Surface* surface = nullptr;     ///< the surface
+  const PlaneSurface* plane = nullptr;  ///< its plane
+};
+/// The plane surfaces with at least kMinInliers inliers, in input order.
+std::vector<PlaneRef> planeSurfaces(const Context& ctx);
 
 /// The inlier positions of a surface.
 std::vector<Vec3> inlierPoints(const PointCloud& scan, const Surface& surface);

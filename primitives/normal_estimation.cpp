@@ -1,12 +1,9 @@
 #include "primitives/normal_estimation.h"
 
 #include <CGAL/Eigen_svd.h>
-#include <CGAL/Orthogonal_k_neighbor_search.h>
-#include <CGAL/Search_traits_3.h>
-#include <CGAL/Search_traits_adapter.h>
-#include <CGAL/Simple_cartesian.h>
-#include <CGAL/jet_estimate_normals.h>
-#include <CGAL/property_map.h>
+#include <CGAL/Monge_via_jet_fitting.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -18,14 +15,15 @@
 #include <utility>
 #include <vector>
 
+#include "core/nearest_neighbors.h"
+#include "core/principal_axes.h"
+#include "primitives/cgal_kernel.h"
+
 namespace csgvox {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point3 = Kernel::Point_3;
-using Vector3 = Kernel::Vector_3;
-using PointMap = CGAL::Pointer_property_map<Point3>::type;    // index -> point
-using NormalMap = CGAL::Pointer_property_map<Vector3>::type;  // index -> normal
+using namespace cgal;  // Kernel, Point3, Vector3
+using JetFitting = CGAL::Monge_via_jet_fitting<Kernel, Kernel, CGAL::Eigen_svd>;
 
 // Closest point pairs that decide how a piece is oriented against the
 // largest piece.
@@ -35,79 +33,57 @@ constexpr std::size_t kMatchingPairs = 16;
 // of neighbourhoods to their planes (noise).
 constexpr double kOnPlaneRadiusFraction = 0.1;
 constexpr double kOnPlaneNoiseFactor = 3.0;
+// Degree of the jet (a quadric, as CGAL's jet_estimate_normals by default).
+constexpr std::size_t kJetDegree = 2;
+// A neighbourhood spans a surface when its second principal variance exceeds
+// this fraction of its first (else it is a line up to rounding, and a jet
+// fitted to it would be meaningless).
+constexpr double kLineVarianceRatio = 1e-12;
 
-/// Nearest-neighbour search over a subset of the points, by index.
-class IndexTree {
- public:
-  IndexTree(const std::vector<std::size_t>& indices, PointMap points)
-      : points_(points),
-        tree_(indices.begin(), indices.end(), Tree::Splitter(), Traits(points)) {
-    tree_.build();
-  }
-
-  /// Index of the point nearest to q, and its squared distance.
-  std::pair<std::size_t, double> nearest(const Point3& q) const {
-    Search search(tree_, q, 1, 0.0, true, Distance(points_));
-    const auto it = search.begin();
-    return {it->first, it->second};
-  }
-
-  /// Appends the indices of the k points nearest to q, closest first;
-  /// returns the squared distance of the farthest of them.
-  double kNearest(const Point3& q, unsigned k, std::vector<std::uint32_t>& out) const {
-    Search search(tree_, q, k, 0.0, true, Distance(points_));
-    double farthest2 = 0.0;
-    for (const auto& [index, d2] : search) {
-      out.push_back(static_cast<std::uint32_t>(index));
-      farthest2 = d2;
-    }
-    return farthest2;
-  }
-
- private:
-  using Traits = CGAL::Search_traits_adapter<std::size_t, PointMap, CGAL::Search_traits_3<Kernel>>;
-  using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
-  using Tree = Search::Tree;
-  using Distance = Search::Distance;
-
-  PointMap points_;
-  Tree tree_;
+/// The distinct positions of a scan in order of first appearance, and for
+/// every point the index of its position.
+struct DistinctPoints {
+  std::vector<Vec3> points;
+  std::vector<std::uint32_t> of;
 };
+
+DistinctPoints distinctPoints(const std::vector<Vec3>& points) {
+  const std::size_t n = points.size();
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](std::uint32_t a, std::uint32_t b) {
+    const Vec3 &p = points[a], &q = points[b];
+    return std::tie(p.x(), p.y(), p.z(), a) < std::tie(q.x(), q.y(), q.z(), b);
+  };
+  std::sort(order.begin(), order.end(), less);
+  // Each run of equal positions is represented by its first (lowest) index.
+  std::vector<std::uint32_t> representative(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    const bool same = r > 0 && points[order[r]] == points[order[r - 1]];
+    representative[order[r]] = same ? representative[order[r - 1]] : order[r];
+  }
+  DistinctPoints d;
+  d.of.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (representative[i] == i) {
+      d.of[i] = static_cast<std::uint32_t>(d.points.size());
+      d.points.push_back(points[i]);
+    } else {
+      d.of[i] = d.of[representative[i]];
+    }
+  }
+  return d;
+}
 
 bool isUsable(const Vector3& n) {
   const double len2 = n.squared_length();
   return std::isfinite(len2) && len2 > 1e-24;
 }
 
-/// Jet-fitted unit normals, unoriented. Points whose fit degenerates (e.g.
-/// coincident neighbours) take the normal of the nearest point whose fit
-/// succeeded.
-void jetNormals(std::vector<Point3>& points, std::vector<Vector3>& normals, unsigned k) {
-  std::vector<std::size_t> all(points.size());
-  std::iota(all.begin(), all.end(), std::size_t{0});
-  const PointMap pointMap = CGAL::make_property_map(points);
-  const NormalMap normalMap = CGAL::make_property_map(normals);
-  CGAL::jet_estimate_normals<CGAL::Sequential_tag>(
-      all, k,
-      CGAL::parameters::point_map(pointMap).normal_map(normalMap).svd_traits(CGAL::Eigen_svd()));
-
-  std::vector<std::size_t> good;
-  std::vector<std::size_t> bad;
-  for (std::size_t i = 0; i < normals.size(); ++i) {
-    if (isUsable(normals[i])) {
-      normals[i] = normals[i] / std::sqrt(normals[i].squared_length());
-      good.push_back(i);
-    } else {
-      bad.push_back(i);
-    }
-  }
-  if (bad.empty()) return;
-  if (good.empty()) {
-    throw std::invalid_argument(
-        "estimateNormals: no surface can be fitted to the points (all coincident or collinear?)");
-  }
-  const IndexTree tree(good, pointMap);
-  for (std::size_t i : bad) normals[i] = normals[tree.nearest(points[i]).first];
+/// True when the points spread in two directions, beyond rounding.
+bool spansSurface(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood) {
+  const Vec3 variances = principalAxes(points, hood).variances;
+  return variances[0] > 0.0 && variances[1] > kLineVarianceRatio * variances[0];
 }
 
 /// The k nearest neighbours of every point, the point itself first.
@@ -119,28 +95,52 @@ struct Neighbourhoods {
   const std::uint32_t* of(std::size_t i) const { return indices.data() + i * k; }
 };
 
-Neighbourhoods findNeighbourhoods(std::vector<Point3>& points, unsigned k) {
+/// For every (distinct) point: its k nearest neighbours, and the unit normal
+/// of a jet fitted to its k + 1 nearest neighbours (as CGAL's
+/// jet_estimate_normals, unoriented). Points whose neighbourhood spans no
+/// surface (collinear) take the normal of the nearest point whose fit
+/// succeeded.
+/// @throw std::invalid_argument when no neighbourhood spans a surface.
+Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& nn, unsigned k,
+                       std::vector<Vector3>& normals) {
   const std::size_t n = points.size();
-  std::vector<std::size_t> all(n);
-  std::iota(all.begin(), all.end(), std::size_t{0});
-  const IndexTree tree(all, CGAL::make_property_map(points));
   Neighbourhoods hoods;
   hoods.k = k;
-  hoods.indices.reserve(n * k);
+  hoods.indices.resize(n * k);
   hoods.radius.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t first = hoods.indices.size();
-    hoods.radius[i] = std::sqrt(tree.kNearest(points[i], k, hoods.indices));
-    hoods.indices.resize(first + k, static_cast<std::uint32_t>(i));  // (never short: n > k)
-    // Coincident points may come in any order: put the point itself first.
-    std::uint32_t* hood = hoods.indices.data() + first;
-    std::uint32_t* self = std::find(hood, hood + k, static_cast<std::uint32_t>(i));
-    if (self == hood + k) {
-      *hood = static_cast<std::uint32_t>(i);  // more than k copies of the point
-    } else {
-      std::iter_swap(hood, self);
+  normals.assign(n, CGAL::NULL_VECTOR);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
+    std::vector<std::uint32_t> hood;
+    std::vector<double> d2;
+    std::vector<Point3> local;
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      nn.kNearest(points[i], k + 1, hood, &d2);  // (never short: n > k)
+      // Distinct points: the point itself is the only one at distance 0.
+      std::iter_swap(hood.begin(), std::find(hood.begin(), hood.end(), std::uint32_t(i)));
+      std::copy(hood.begin(), hood.begin() + k, hoods.indices.begin() + std::ptrdiff_t(i * k));
+      hoods.radius[i] = std::sqrt(d2[k - 1]);
+      if (!spansSurface(points, hood)) continue;
+      local.clear();
+      for (std::uint32_t j : hood) local.emplace_back(points[j].x(), points[j].y(), points[j].z());
+      JetFitting fit;
+      const Vector3 normal = fit(local.begin(), local.end(), kJetDegree, 1).normal_direction();
+      if (isUsable(normal)) normals[i] = normal / std::sqrt(normal.squared_length());
     }
+  });
+
+  std::vector<std::uint32_t> good;
+  std::vector<std::uint32_t> bad;
+  for (std::uint32_t i = 0; i < n; ++i) (isUsable(normals[i]) ? good : bad).push_back(i);
+  if (bad.empty()) return hoods;
+  if (good.empty()) {
+    throw std::invalid_argument(
+        "estimateNormals: no surface can be fitted to the points (they lie on a line)");
   }
+  std::vector<Vec3> goodPoints;
+  goodPoints.reserve(good.size());
+  for (std::uint32_t i : good) goodPoints.push_back(points[i]);
+  const NearestNeighbors goodTree(goodPoints);
+  for (std::uint32_t i : bad) normals[i] = normals[good[goodTree.nearest(points[i])]];
   return hoods;
 }
 
@@ -234,20 +234,24 @@ double edgeWeight(const Point3& p, const Vector3& np, const Point3& q, const Vec
 /// the classic weight, edges through thin walls cost nothing, and on the
 /// noisy scans in data/ whole walls came out inverted). Returns the trees,
 /// one per connected piece of the graph, each consistent within itself.
-std::vector<std::vector<std::size_t>> orientAlongSpanningForest(
-    const std::vector<Point3>& points, std::vector<Vector3>& normals, const Neighbourhoods& hoods) {
+std::vector<std::vector<std::size_t>> orientAlongSpanningForest(const std::vector<Point3>& points,
+                                                                std::vector<Vector3>& normals,
+                                                                const Neighbourhoods& hoods) {
   const std::size_t n = points.size();
   struct Edge {
     double weight;
     std::uint32_t a, b;
-    bool operator<(const Edge& o) const { return std::tie(weight, a, b) < std::tie(o.weight, o.a, o.b); }
+    bool operator<(const Edge& o) const {
+      return std::tie(weight, a, b) < std::tie(o.weight, o.a, o.b);
+    }
   };
   std::vector<Edge> edges;
   edges.reserve(n * hoods.k);
   for (std::size_t i = 0; i < n; ++i) {
     for (unsigned c = 1; c < hoods.k; ++c) {
       const std::uint32_t j = hoods.of(i)[c];
-      edges.push_back({edgeWeight(points[i], normals[i], points[j], normals[j]), static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
+      edges.push_back({edgeWeight(points[i], normals[i], points[j], normals[j]),
+                       static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
                        static_cast<std::uint32_t>(std::max<std::size_t>(i, j))});
     }
   }
@@ -297,18 +301,25 @@ std::vector<std::vector<std::size_t>> orientAlongSpanningForest(
 
 /// Orients every piece but the largest like the largest, judged by the
 /// closest point pairs between them.
-void matchPieces(std::vector<Point3>& points, std::vector<Vector3>& normals,
+void matchPieces(const std::vector<Point3>& points, std::vector<Vector3>& normals,
                  const std::vector<std::vector<std::size_t>>& pieces) {
   if (pieces.size() < 2) return;
-  const auto largest = std::max_element(
-      pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.size() < b.size(); });
-  const IndexTree tree(*largest, CGAL::make_property_map(points));
+  const auto largest =
+      std::max_element(pieces.begin(), pieces.end(),
+                       [](const auto& a, const auto& b) { return a.size() < b.size(); });
+  std::vector<Vec3> largestPoints;
+  largestPoints.reserve(largest->size());
+  for (std::size_t i : *largest)
+    largestPoints.emplace_back(points[i].x(), points[i].y(), points[i].z());
+  const NearestNeighbors tree(largestPoints);
   for (auto piece = pieces.begin(); piece != pieces.end(); ++piece) {
     if (piece == largest) continue;
     std::vector<std::pair<double, double>> pairs;  // squared gap, agreement
     pairs.reserve(piece->size());
     for (std::size_t i : *piece) {
-      const auto [j, d2] = tree.nearest(points[i]);
+      double d2 = 0.0;
+      const std::size_t j =
+          (*largest)[tree.nearest(Vec3(points[i].x(), points[i].y(), points[i].z()), &d2)];
       pairs.emplace_back(d2, agreement(points[i], normals[i], points[j], normals[j]));
     }
     const std::size_t m = std::min(kMatchingPairs, pairs.size());
@@ -363,24 +374,37 @@ void estimateNormals(PointCloud& cloud, int neighbors) {
                                 " points are too few for " + std::to_string(neighbors) +
                                 " neighbours");
   }
-  std::vector<Point3> points;
-  points.reserve(n);
   for (const Vec3& p : cloud.points) {
     if (!p.allFinite()) throw std::invalid_argument("estimateNormals: a point is not finite");
-    points.emplace_back(p.x(), p.y(), p.z());
   }
-  std::vector<Vector3> normals(n, CGAL::NULL_VECTOR);
-  const auto k = static_cast<unsigned>(neighbors);
-
-  jetNormals(points, normals, k);
-  const Neighbourhoods hoods = findNeighbourhoods(points, k);
+  // Copies of a point (a common scanner artefact) would make degenerate
+  // neighbourhoods: the normals are estimated on the distinct positions.
+  const DistinctPoints distinct = distinctPoints(cloud.points);
+  const std::size_t m = distinct.points.size();
+  if (m == 1) {
+    throw std::invalid_argument("estimateNormals: all " + std::to_string(n) +
+                                " points are at the same position");
+  }
+  if (m <= static_cast<std::size_t>(neighbors)) {
+    throw std::invalid_argument(
+        "estimateNormals: " + std::to_string(m) + " distinct positions among " + std::to_string(n) +
+        " points are too few for " + std::to_string(neighbors) + " neighbours");
+  }
+  const NearestNeighbors tree(distinct.points);
+  std::vector<Vector3> normals;
+  const Neighbourhoods hoods =
+      fitJets(distinct.points, tree, static_cast<unsigned>(neighbors), normals);
+  std::vector<Point3> points;
+  points.reserve(m);
+  for (const Vec3& p : distinct.points) points.emplace_back(p.x(), p.y(), p.z());
   sharpenAtEdges(points, normals, hoods);
   matchPieces(points, normals, orientAlongSpanningForest(points, normals, hoods));
   orientOutwards(points, normals);
 
   cloud.normals.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    cloud.normals[i] = Vec3(normals[i].x(), normals[i].y(), normals[i].z()).normalized();
+    const Vector3& normal = normals[distinct.of[i]];
+    cloud.normals[i] = Vec3(normal.x(), normal.y(), normal.z()).normalized();
   }
 }
 

@@ -6,7 +6,8 @@
 namespace csgvox {
 
 /// Estimates a unit outward normal for every point of `cloud`, replacing any
-/// normals it has:
+/// normals it has. Copies of a point share one normal, estimated once (copies
+/// would make degenerate neighbourhoods).
 /// 1. a jet (quadric) fit to the point's `neighbors` nearest neighbours;
 /// 2. near sharp edges, where such a fit blends the two faces, the normal of
 ///    the neighbour whose tangent plane holds most of the neighbourhood;
@@ -19,10 +20,12 @@ namespace csgvox {
 ///
 /// Reliable for scans of closed surfaces sampled densely relative to their
 /// features; walls much thinner than the neighbourhood may still come out
-/// wrong. Deterministic for a given cloud; single-threaded (about 2 s per
-/// 100,000 points).
-/// @throw std::invalid_argument if `neighbors` < 6, if the cloud has no
-///        more than `neighbors` points, or if a point is not finite.
+/// wrong. Deterministic for a given cloud, with any number of threads (the
+/// jet fits run in parallel).
+/// @throw std::invalid_argument if `neighbors` < 6, if a point is not finite,
+///        if the cloud has no more than `neighbors` distinct positions (in
+///        particular, if all its points are at one position), or if no
+///        neighbourhood spans a surface (all points on a line).
 void estimateNormals(PointCloud& cloud, int neighbors);
 
 }  // namespace csgvox

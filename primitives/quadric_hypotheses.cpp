@@ -2,19 +2,7 @@
 // §5.2): bounded cylinders, cone frustums, spheres and tori from their
 // patches; the additional box of each patch (minimal oriented bounding box,
 // or the maximal box of a quarter cylinder); the indirect candidates
-// box − quadric and box ∩ quadric; the separators. Also the CGAL oriented
-// bounding box used everywhere (this is the only file including CGAL).
-
-// CGAL's optimal bounding box needs its Eigen support; Eigen is linked already.
-#ifndef CGAL_EIGEN3_ENABLED
-#define CGAL_EIGEN3_ENABLED 1
-#endif
-
-#include "primitives/hypotheses_internal.h"
-
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/optimal_bounding_box.h>
-#include <Eigen/Eigenvalues>
+// box − quadric and box ∩ quadric; the separators.
 
 #include <algorithm>
 #include <array>
@@ -23,30 +11,12 @@
 #include <numbers>
 #include <optional>
 
+#include "primitives/hypotheses_internal.h"
+
 namespace csgvox::hypotheses_detail {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-// Right-handed version of an orthonormal frame.
-Mat3 rightHanded(Mat3 f) {
-  if (f.determinant() < 0.0) f.col(2) = -f.col(2);
-  return f;
-}
-
-// Principal axes of the points (largest spread first).
-Mat3 principalFrame(std::span<const Vec3> points, Eigen::Vector3d* eigenvalues = nullptr) {
-  Vec3 mean = Vec3::Zero();
-  for (const Vec3& p : points) mean += p;
-  mean /= std::max<double>(1.0, static_cast<double>(points.size()));
-  Mat3 cov = Mat3::Zero();
-  for (const Vec3& p : points) cov += (p - mean) * (p - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
-  Mat3 f;
-  for (int k = 0; k < 3; ++k) f.col(k) = eig.eigenvectors().col(2 - k);
-  if (eigenvalues != nullptr) *eigenvalues = eig.eigenvalues().reverse();
-  return rightHanded(f);
-}
 
 // The box with axes `frame` around the points, with robust extents.
 Box boxAround(const Mat3& frame, std::span<const Vec3> points, double sigma) {
@@ -96,10 +66,10 @@ struct Quadric {
   Primitive primitive;
   std::vector<Vec3> points;  // inliers projected onto the surface
   double sigma = 0.0;
-  bool axial = false;             // cylinder, cone, torus: has an axis
-  Vec3 axis = Vec3::UnitZ();      // unit
-  Vec3 axisPoint = Vec3::Zero();  // origin of the axial coordinate t
-  Range extent;                   // of the inliers along the axis (t)
+  bool axial = false;                        // cylinder, cone, torus: has an axis
+  Vec3 axis = Vec3::UnitZ();                 // unit
+  Vec3 axisPoint = Vec3::Zero();             // origin of the axial coordinate t
+  Range extent;                              // of the inliers along the axis (t)
   std::array<bool, 2> capped{false, false};  // lower, upper end on a fitted plane
 };
 
@@ -232,7 +202,7 @@ Box axialMinimalBox(const Quadric& q) {
   std::vector<Eigen::Vector2d> uv;
   uv.reserve(q.points.size());
   for (const Vec3& p : q.points) uv.emplace_back(p.dot(f.col(0)), p.dot(f.col(1)));
-  const Rectangle2 rect = minAreaRectangle(std::move(uv));
+  const Rectangle2 rect = minAreaRectangle(uv);
   Mat3 frame;
   frame.col(0) = rect.direction.x() * f.col(0) + rect.direction.y() * f.col(1);
   frame.col(2) = q.axis;
@@ -251,12 +221,11 @@ struct PlaneInfo {
 
 std::vector<PlaneInfo> planeInfos(const Context& ctx) {
   std::vector<PlaneInfo> planes;
-  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
-    const Surface& surface = ctx.surfaces[s];
-    const PlaneSurface* pl = surface.as<PlaneSurface>();
-    if (pl == nullptr || surface.inliers.size() < kMinInliers) continue;
+  for (const PlaneRef& ref : planeSurfaces(ctx)) {
+    const Surface& surface = *ref.surface;
+    const PlaneSurface* pl = ref.plane;
     PlaneInfo info;
-    info.surface = s;
+    info.surface = ref.index;
     info.normal = pl->normal.normalized();
     info.offset = pl->offset / pl->normal.norm();
     for (std::uint32_t i : surface.inliers) info.centroid += ctx.scan.points[i];
@@ -354,8 +323,8 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
     return;
   }
   q.extent = extent;
-  q.primitive = Cylinder{q.axisPoint + 0.5 * (extent.lo + extent.hi) * q.axis, q.axis,
-                         cyl->radius, extent.size()};
+  q.primitive = Cylinder{q.axisPoint + 0.5 * (extent.lo + extent.hi) * q.axis, q.axis, cyl->radius,
+                         extent.size()};
 }
 
 // True when the plane n·x = offset is (within tolerance) one of the fitted planes.
@@ -379,35 +348,6 @@ Candidate makeCandidate(CsgTree tree, CandidateOrigin origin, std::vector<int> s
 }
 
 }  // namespace
-
-Mat3 orientedBoundingFrame(std::span<const Vec3> points, std::uint32_t seed) {
-  Eigen::Vector3d ev;
-  const Mat3 pca = principalFrame(points, &ev);
-  // CGAL needs a full-dimensional set of at least four points.
-  if (points.size() < 4 || !(ev[2] > 1e-10 * ev[0])) return pca;
-  // The search runs on the convex hull, which for points sampled exactly on
-  // a convex surface holds nearly all of them: an even subset keeps it fast.
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  const std::size_t step = std::max<std::size_t>(1, (points.size() + 299) / 300);
-  std::vector<K::Point_3> cgalPoints;
-  cgalPoints.reserve(points.size() / step + 1);
-  for (std::size_t i = 0; i < points.size(); i += step) {
-    cgalPoints.emplace_back(points[i].x(), points[i].y(), points[i].z());
-  }
-  K::Aff_transformation_3 transform;
-  CGAL::oriented_bounding_box(cgalPoints, transform, CGAL::parameters::random_seed(seed));
-  // The transformation rotates the points into the box's axis-aligned frame:
-  // its rows are the box axes.
-  Mat3 frame;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) frame(j, i) = CGAL::to_double(transform.m(i, j));
-  }
-  for (int k = 0; k < 3; ++k) {
-    if (!(frame.col(k).norm() > 0.5)) return pca;
-    frame.col(k).normalize();
-  }
-  return rightHanded(frame);
-}
 
 std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& stats) {
   std::vector<Candidate> out;
@@ -498,9 +438,8 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
       }
     }
     if (!box) {
-      box = q.axial
-                ? axialMinimalBox(q)
-                : boxAround(orientedBoundingFrame(q.points, ctx.options.seed), q.points, q.sigma);
+      box = q.axial ? axialMinimalBox(q)
+                    : boxAround(searchedBoxFrame(q.points, ctx.options.seed), q.points, q.sigma);
     }
     if (!(box->halfSize.minCoeff() > 1e-6 * ctx.diagonal)) continue;
     // Both boxes are estimated from the noisy patch: compare within its noise too.

@@ -29,13 +29,16 @@ Vec3* axisPointOf(Surface& s) {
 
 double weightOf(const Surface& s) { return double(std::max<std::size_t>(1, s.inliers.size())); }
 
-double angleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+double angleBetween(const Vec3& a, const Vec3& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
 
 // Greedy clustering of scalar or vector values, heaviest first: each cluster
 // takes the unclustered items within `tolerance` of its seed. Returns the
 // clusters as lists of item indices.
 std::vector<std::vector<std::size_t>> clusterByWeight(
-    const std::vector<double>& weights, const std::function<bool(std::size_t, std::size_t)>& close) {
+    const std::vector<double>& weights,
+    const std::function<bool(std::size_t, std::size_t)>& close) {
   std::vector<std::size_t> order(weights.size());
   std::iota(order.begin(), order.end(), std::size_t(0));
   std::stable_sort(order.begin(), order.end(),
@@ -57,6 +60,13 @@ std::vector<std::vector<std::size_t>> clusterByWeight(
     clusters.push_back(std::move(members));
   }
   return clusters;
+}
+
+// The field `Member` of a surface of type Shape; null for other types.
+template <class Shape, double Shape::*Member>
+double* fieldOf(Surface& s) {
+  auto* shape = std::get_if<Shape>(&s.shape);
+  return shape ? &(shape->*Member) : nullptr;
 }
 
 class Regularizer {
@@ -239,15 +249,21 @@ class Regularizer {
     }
   }
 
-  void snapCoaxial() {
-    std::vector<std::size_t> axial;
-    std::vector<double> weights;
+  // Appends the live surfaces for which `has` holds, and their weights.
+  template <class Has>
+  void liveSurfaces(Has has, std::vector<std::size_t>& ids, std::vector<double>& weights) {
     for (std::size_t s = 0; s < r_.surfaces.size(); ++s) {
-      if (alive_[s] && axisPointOf(r_.surfaces[s])) {
-        axial.push_back(s);
+      if (alive_[s] && has(r_.surfaces[s])) {
+        ids.push_back(s);
         weights.push_back(weightOf(r_.surfaces[s]));
       }
     }
+  }
+
+  void snapCoaxial() {
+    std::vector<std::size_t> axial;
+    std::vector<double> weights;
+    liveSurfaces([](Surface& s) { return axisPointOf(s) != nullptr; }, axial, weights);
     const auto dir = [&](std::size_t k) { return *directionOf(r_.surfaces[axial[k]]); };
     const auto foot = [&](std::size_t k) {  // where the axis meets the plane through 0 normal to it
       const Vec3 p = *axisPointOf(r_.surfaces[axial[k]]);
@@ -314,16 +330,10 @@ class Regularizer {
                 const std::function<double(const Surface&, const Surface&)>& tolerance) {
     std::vector<std::size_t> ids;
     std::vector<double> weights;
-    for (std::size_t s = 0; s < r_.surfaces.size(); ++s) {
-      if (alive_[s] && get(r_.surfaces[s])) {
-        ids.push_back(s);
-        weights.push_back(weightOf(r_.surfaces[s]));
-      }
-    }
+    liveSurfaces([&](Surface& s) { return get(s) != nullptr; }, ids, weights);
     const auto value = [&](std::size_t k) { return *get(r_.surfaces[ids[k]]); };
     const auto clusters = clusterByWeight(weights, [&](std::size_t a, std::size_t b) {
-      return std::abs(value(a) - value(b)) <=
-             tolerance(r_.surfaces[ids[a]], r_.surfaces[ids[b]]);
+      return std::abs(value(a) - value(b)) <= tolerance(r_.surfaces[ids[a]], r_.surfaces[ids[b]]);
     });
     for (const auto& members : clusters) {
       if (members.size() < 2) continue;
@@ -360,26 +370,11 @@ class Regularizer {
 
   void snapEqualRadii() {
     const auto tol = [this](const Surface& a, const Surface& b) { return radiusTolerance(a, b); };
-    equalize([](Surface& s) -> double* {
-      auto* c = std::get_if<CylinderSurface>(&s.shape);
-      return c ? &c->radius : nullptr;
-    }, tol);
-    equalize([](Surface& s) -> double* {
-      auto* c = std::get_if<SphereSurface>(&s.shape);
-      return c ? &c->radius : nullptr;
-    }, tol);
-    equalize([](Surface& s) -> double* {
-      auto* t = std::get_if<TorusSurface>(&s.shape);
-      return t ? &t->majorRadius : nullptr;
-    }, tol);
-    equalize([](Surface& s) -> double* {
-      auto* t = std::get_if<TorusSurface>(&s.shape);
-      return t ? &t->minorRadius : nullptr;
-    }, tol);
-    equalize([](Surface& s) -> double* {
-      auto* c = std::get_if<ConeSurface>(&s.shape);
-      return c ? &c->halfAngle : nullptr;
-    }, o_.angleTolerance);
+    equalize(fieldOf<CylinderSurface, &CylinderSurface::radius>, tol);
+    equalize(fieldOf<SphereSurface, &SphereSurface::radius>, tol);
+    equalize(fieldOf<TorusSurface, &TorusSurface::majorRadius>, tol);
+    equalize(fieldOf<TorusSurface, &TorusSurface::minorRadius>, tol);
+    equalize(fieldOf<ConeSurface, &ConeSurface::halfAngle>, o_.angleTolerance);
   }
 
   // True when a and b are the same surface after snapping (b may be merged into a).
@@ -392,7 +387,8 @@ class Regularizer {
     };
     if (const auto* ca = a.as<CylinderSurface>()) {
       const auto* cb = b.as<CylinderSurface>();
-      return ca->radius == cb->radius && sameLine(ca->axisPoint, ca->axisDir, cb->axisPoint, cb->axisDir);
+      return ca->radius == cb->radius &&
+             sameLine(ca->axisPoint, ca->axisDir, cb->axisPoint, cb->axisDir);
     }
     if (const auto* ca = a.as<ConeSurface>()) {
       const auto* cb = b.as<ConeSurface>();
@@ -439,7 +435,8 @@ class Regularizer {
       if (!alive_[a] || r_.surfaces[a].type() == SurfaceType::Plane) continue;
       for (std::size_t b = a + 1; b < r_.surfaces.size(); ++b) {
         if (!alive_[b] || !identical(r_.surfaces[a], r_.surfaces[b])) continue;
-        const std::size_t into = r_.surfaces[a].inliers.size() >= r_.surfaces[b].inliers.size() ? a : b;
+        const std::size_t into =
+            r_.surfaces[a].inliers.size() >= r_.surfaces[b].inliers.size() ? a : b;
         meanPosition(into, into == a ? b : a);
         merge(into, into == a ? b : a);
         ++report_.duplicatesMerged;

@@ -1,13 +1,8 @@
 #include "primitives/surface_detection.h"
 
-#include "core/nearest_neighbors.h"
-#include "primitives/surface_refinement.h"
-
 #include <CGAL/Random.h>
 #include <CGAL/Shape_detection/Efficient_RANSAC.h>
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/property_map.h>
-#include <Eigen/Eigenvalues>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -22,18 +17,25 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "core/nearest_neighbors.h"
+#include "core/principal_axes.h"
+#include "core/statistics.h"
+#include "primitives/cgal_kernel.h"
+#include "primitives/surface_refinement.h"
+
 namespace csgvox {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using CPoint = Kernel::Point_3;
-using CVector = Kernel::Vector_3;
+using cgal::Kernel;
+using CPoint = cgal::Point3;
+using CVector = cgal::Vector3;
 // Efficient_RANSAC reorders its input, so each point carries its scan index.
 using Pwn = std::tuple<CPoint, CVector, std::uint32_t>;
 using PwnRange = std::vector<Pwn>;
-using Traits = CGAL::Shape_detection::Efficient_RANSAC_traits<
-    Kernel, PwnRange, CGAL::Nth_of_tuple_property_map<0, Pwn>,
-    CGAL::Nth_of_tuple_property_map<1, Pwn>>;
+using Traits =
+    CGAL::Shape_detection::Efficient_RANSAC_traits<Kernel, PwnRange,
+                                                   CGAL::Nth_of_tuple_property_map<0, Pwn>,
+                                                   CGAL::Nth_of_tuple_property_map<1, Pwn>>;
 using Ransac = CGAL::Shape_detection::Efficient_RANSAC<Traits>;
 using CgalPlane = CGAL::Shape_detection::Plane<Traits>;
 using CgalCylinder = CGAL::Shape_detection::Cylinder<Traits>;
@@ -75,24 +77,6 @@ std::vector<std::uint32_t> strideSubset(std::size_t n, std::size_t count) {
   return out;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-// Eigen-decomposition of the covariance of the points.
-Eigen::SelfAdjointEigenSolver<Mat3> pointCovariance(const std::vector<Vec3>& points) {
-  Vec3 mean = Vec3::Zero();
-  for (const Vec3& p : points) mean += p;
-  mean /= double(points.size());
-  Mat3 cov = Mat3::Zero();
-  for (const Vec3& p : points) cov += (p - mean) * (p - mean).transpose();
-  cov /= double(points.size());
-  return Eigen::SelfAdjointEigenSolver<Mat3>(cov);
-}
-
 // Majority vote: true when most normals point along the outward direction
 // returned by `outward(i)` for inlier i.
 template <class Outward>
@@ -105,8 +89,7 @@ bool majorityOutward(const PointCloud& cloud, const std::vector<std::uint32_t>& 
 
 // Converts a CGAL shape into a Surface on the scan's points; returns false for
 // shapes that are not plausible features of a part of diagonal D.
-bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double diag,
-                  Surface& out) {
+bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double diag, Surface& out) {
   const auto finite = [](const Vec3& v) { return v.allFinite(); };
   if (const auto* s = dynamic_cast<const CgalPlane*>(&shape)) {
     Vec3 n = toVec(s->plane_normal());
@@ -168,7 +151,8 @@ bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double di
     const Vec3 centre = toVec(s->center());
     const double r = s->radius();
     if (!finite(centre) || !(r > 0.0) || !(r <= diag)) return false;
-    out.convex = majorityOutward(cloud, out.inliers, [&](const Vec3& p) { return Vec3(p - centre); });
+    out.convex =
+        majorityOutward(cloud, out.inliers, [&](const Vec3& p) { return Vec3(p - centre); });
     out.shape = SphereSurface{centre, r};
     return true;
   }
@@ -201,8 +185,7 @@ std::string degeneracy(const PointCloud& cloud, double diag) {
     return "only " + std::to_string(cloud.size()) + " point(s): at least 3 are needed";
   }
   if (!(diag > 0.0)) return "all points are identical";
-  const auto eig = pointCovariance(cloud.points);
-  const Vec3 sd = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
+  const Vec3 sd = principalAxes(cloud.points).variances.cwiseMax(0.0).cwiseSqrt();  // descending
   char buf[160];
   if (sd[1] < 1e-6 * diag) {
     std::snprintf(buf, sizeof(buf),
@@ -210,11 +193,11 @@ std::string degeneracy(const PointCloud& cloud, double diag) {
                   100.0 * sd[1] / diag);
     return buf;
   }
-  if (sd[0] < 1e-4 * diag) {
+  if (sd[2] < 1e-4 * diag) {
     std::snprintf(buf, sizeof(buf),
                   "all points lie in one plane (thickness %.2g %% of the diagonal): not the "
                   "scan of a solid",
-                  100.0 * sd[0] / diag);
+                  100.0 * sd[2] / diag);
     return buf;
   }
   return {};
@@ -247,8 +230,8 @@ void validate(const PointCloud& cloud, const DetectOptions& o) {
 // writes its own slot, so the result does not depend on the scheduling.
 // Returns false when cancelled.
 bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subset,
-                const std::set<SurfaceType>& types, const Ransac::Parameters& params, unsigned int seed,
-                double diag, const std::function<bool(double)>& callback,
+                const std::set<SurfaceType>& types, const Ransac::Parameters& params,
+                unsigned int seed, double diag, const std::function<bool(double)>& callback,
                 const std::function<bool(Surface&)>& accept, std::vector<Surface>& found) {
   if (subset.size() < params.min_points || subset.size() < 10) return true;
   PwnRange input;
@@ -282,7 +265,8 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
       std::optional<Surface>& slot = slots.emplace_back();
       tasks.run([&, shape = *it, &slot = slot]() {
         Surface s;
-        for (std::size_t local : shape->indices_of_assigned_points()) s.inliers.push_back(scanIndex[local]);
+        for (std::size_t local : shape->indices_of_assigned_points())
+          s.inliers.push_back(scanIndex[local]);
         std::sort(s.inliers.begin(), s.inliers.end());
         if (s.inliers.size() < params.min_points) return;
         if (!convertShape(*shape, cloud, diag, s) || !accept(s)) return;
@@ -315,30 +299,21 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
   return true;
 }
 
-// Simplicity of a surface type: its number of parameters.
-int complexity(SurfaceType type) {
-  switch (type) {
-    case SurfaceType::Plane: return 3;
-    case SurfaceType::Sphere: return 4;
-    case SurfaceType::Cylinder: return 5;
-    case SurfaceType::Cone: return 6;
-    case SurfaceType::Torus: return 7;
-  }
-  return 8;
-}
-
 // A plausible feature of a part of diagonal D: radii up to D, cones neither
 // nearly flat nor nearly cylindrical.
 bool plausible(const Surface& s, double diag) {
   constexpr double kMinAngle = 2.0 * std::numbers::pi / 180.0;
   switch (s.type()) {
-    case SurfaceType::Plane: return true;
-    case SurfaceType::Cylinder: return s.as<CylinderSurface>()->radius <= diag;
+    case SurfaceType::Plane:
+      return true;
+    case SurfaceType::Cylinder:
+      return s.as<CylinderSurface>()->radius <= diag;
     case SurfaceType::Cone: {
       const double a = s.as<ConeSurface>()->halfAngle;
       return a >= kMinAngle && a <= 0.5 * std::numbers::pi - kMinAngle;
     }
-    case SurfaceType::Sphere: return s.as<SphereSurface>()->radius <= diag;
+    case SurfaceType::Sphere:
+      return s.as<SphereSurface>()->radius <= diag;
     case SurfaceType::Torus: {
       const auto& t = *s.as<TorusSurface>();
       return t.majorRadius <= diag && t.minorRadius <= t.majorRadius;
@@ -442,7 +417,7 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   for (std::size_t k = 0; k < candidates.size(); ++k) {
     const double score =
         selectionCost(cloud, shape.inliers, candidates[k], scales, eps, o.normalThreshold) +
-        complexity(candidates[k].type()) * logN;
+        parameterCount(candidates[k].type()) * logN;
     if (score < best) {
       best = score;
       chosen = int(k);
@@ -458,10 +433,14 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
 
 std::string_view detectionStatusName(DetectionResult::Status status) {
   switch (status) {
-    case DetectionResult::Status::Ok: return "ok";
-    case DetectionResult::Status::NoSurfaces: return "no surfaces";
-    case DetectionResult::Status::DegenerateInput: return "degenerate input";
-    case DetectionResult::Status::Cancelled: return "cancelled";
+    case DetectionResult::Status::Ok:
+      return "ok";
+    case DetectionResult::Status::NoSurfaces:
+      return "no surfaces";
+    case DetectionResult::Status::DegenerateInput:
+      return "degenerate input";
+    case DetectionResult::Status::Cancelled:
+      return "cancelled";
   }
   return "unknown";
 }
@@ -482,10 +461,7 @@ double estimateNoise(const PointCloud& cloud, const NearestNeighbors& nn, int ne
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       nn.kNearest(cloud.points[sample[s]], k + 1, idx, &d2);
-      std::vector<Vec3> local;
-      local.reserve(idx.size());
-      for (std::uint32_t i : idx) local.push_back(cloud.points[i]);
-      rms[s] = std::sqrt(std::max(0.0, pointCovariance(local).eigenvalues()[0]));
+      rms[s] = std::sqrt(std::max(0.0, principalAxes(cloud.points, idx).variances[2]));
       radius[s] = std::sqrt(d2.back());
     });
     const double m = double(k + 1), nu = m - 3.0;
@@ -527,6 +503,106 @@ double estimateSpacing(const PointCloud& cloud, const NearestNeighbors& nn) {
     dist[s] = d2.size() == 2 ? std::sqrt(d2[1]) : 0.0;
   });
   return median(std::move(dist));
+}
+
+// Scale-free parameters: relative to D (result.diagonal), raised to what the
+// noise and the sampling density require.
+void setScales(const PointCloud& cloud, const DetectOptions& options, DetectionResult& result) {
+  const double diag = result.diagonal;
+  const NearestNeighbors nn(cloud.points);
+  result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
+  result.normalNoise = estimateNormalNoise(cloud, nn);
+  const double spacing = estimateSpacing(cloud, nn);
+  result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,
+                                                             options.maxEpsilon * diag));
+  result.clusterEpsilon = std::max(options.clusterEpsilon * diag, options.spacingFactor * spacing);
+  result.minPoints = std::max<std::size_t>(
+      options.minPointsFloor, std::size_t(std::lround(options.minPoints * double(cloud.size()))));
+}
+
+// One RANSAC pass: the surface types it looks for and its minimum support.
+struct Stage {
+  std::set<SurfaceType> types;
+  std::size_t minPoints;
+};
+
+// RANSAC stages. Staged: planes and cylinders first, then cones and spheres,
+// then tori, so that a flexible surface cannot claim the points of several
+// simpler ones (a torus over a hole and its countersink). Then later passes
+// with all types and fewer points for small features.
+std::vector<Stage> ransacStages(const DetectOptions& options, std::size_t minPoints) {
+  std::vector<Stage> stages;
+  if (options.staged) {
+    std::set<SurfaceType> sofar;
+    for (const auto& group : {std::set<SurfaceType>{SurfaceType::Plane, SurfaceType::Cylinder},
+                              std::set<SurfaceType>{SurfaceType::Cone, SurfaceType::Sphere},
+                              std::set<SurfaceType>{SurfaceType::Torus}}) {
+      bool added = false;
+      for (SurfaceType t : group) {
+        if (options.enabled.count(t) && sofar.insert(t).second) added = true;
+      }
+      if (added) stages.push_back({sofar, minPoints});
+    }
+  } else {
+    stages.push_back({options.enabled, minPoints});
+  }
+  for (int pass = 1; pass < options.passes; ++pass) {
+    minPoints = std::max<std::size_t>(
+        std::min<std::size_t>(options.minPointsFloor, minPoints),
+        std::size_t(std::lround(double(minPoints) * options.laterPassMinPoints)));
+    stages.push_back({options.enabled, minPoints});
+  }
+  return stages;
+}
+
+// Settles the surfaces found so far: drops redundant ones, gives every point
+// to the surface that explains it best, re-fits. `subset` becomes the
+// unassigned points, which later stages search.
+void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surface>& found,
+            std::vector<std::uint32_t>& subset) {
+  result.surfaces = std::move(found);
+  result.status = DetectionResult::Status::Ok;
+  RefineOptions settle;
+  settle.maxFitPoints = 3000;
+  // Points a surface's band reaches away from its patch stay with it until
+  // the final refinement: the later passes search the unassigned points
+  // for new surfaces, and stray noise is no help there.
+  settle.connectedPatches = false;
+  refineSurfaces(cloud, result, settle);
+  found = std::move(result.surfaces);
+  result.surfaces.clear();
+  subset.clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (result.assignment[i] < 0) subset.push_back(std::uint32_t(i));
+  }
+}
+
+// The final status and message of a detection.
+void summarise(const PointCloud& cloud, DetectionResult& result) {
+  const double diag = result.diagonal;
+  std::size_t assigned = 0;
+  std::array<int, 5> perType{};
+  for (const Surface& surf : result.surfaces) {
+    assigned += surf.inliers.size();
+    ++perType[std::size_t(surf.type())];
+  }
+  char buf[320];
+  if (result.surfaces.empty()) {
+    result.status = DetectionResult::Status::NoSurfaces;
+    std::snprintf(buf, sizeof(buf),
+                  "no surface explains %zu or more points within %.3g (%.2g %% of the diagonal; "
+                  "estimated noise %.3g)",
+                  result.minPoints, result.epsilon, 100.0 * result.epsilon / diag, result.noise);
+  } else {
+    result.status = DetectionResult::Status::Ok;
+    std::snprintf(buf, sizeof(buf),
+                  "%zu surfaces (%d planes, %d cylinders, %d cones, %d spheres, %d tori) explain "
+                  "%.1f %% of the points; epsilon %.3g (%.2g %% of D), estimated noise %.3g",
+                  result.surfaces.size(), perType[0], perType[1], perType[2], perType[3],
+                  perType[4], 100.0 * double(assigned) / double(cloud.size()), result.epsilon,
+                  100.0 * result.epsilon / diag, result.noise);
+  }
+  result.message = buf;
 }
 
 }  // namespace
@@ -571,19 +647,7 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
   }
   if (!report(0.0, "noise")) return cancelled();
 
-  // Scale-free parameters: relative to D, raised to what the noise and the
-  // sampling density require.
-  const NearestNeighbors nn(cloud.points);
-  result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
-  result.normalNoise = estimateNormalNoise(cloud, nn);
-  const double spacing = estimateSpacing(cloud, nn);
-  result.epsilon = std::max(options.epsilon * diag,
-                            std::min(options.noiseFactor * result.noise, options.maxEpsilon * diag));
-  result.clusterEpsilon =
-      std::max(options.clusterEpsilon * diag, options.spacingFactor * spacing);
-  std::size_t minPoints = std::max<std::size_t>(
-      options.minPointsFloor, std::size_t(std::lround(options.minPoints * double(cloud.size()))));
-  result.minPoints = minPoints;
+  setScales(cloud, options, result);
 
   if (options.enabled.empty()) {
     result.status = Status::NoSurfaces;
@@ -591,36 +655,7 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     return result;
   }
 
-  // RANSAC stages. Staged: planes and cylinders first, then cones and spheres,
-  // then tori, so that a flexible surface cannot claim the points of several
-  // simpler ones (a torus over a hole and its countersink). Then later passes
-  // with all types and fewer points for small features.
-  struct Stage {
-    std::set<SurfaceType> types;
-    std::size_t minPoints;
-  };
-  std::vector<Stage> stages;
-  if (options.staged) {
-    std::set<SurfaceType> sofar;
-    for (const auto& group : {std::set<SurfaceType>{SurfaceType::Plane, SurfaceType::Cylinder},
-                              std::set<SurfaceType>{SurfaceType::Cone, SurfaceType::Sphere},
-                              std::set<SurfaceType>{SurfaceType::Torus}}) {
-      bool added = false;
-      for (SurfaceType t : group) {
-        if (options.enabled.count(t) && sofar.insert(t).second) added = true;
-      }
-      if (added) stages.push_back({sofar, minPoints});
-    }
-  } else {
-    stages.push_back({options.enabled, minPoints});
-  }
-  for (int pass = 1; pass < options.passes; ++pass) {
-    minPoints = std::max<std::size_t>(
-        std::min<std::size_t>(options.minPointsFloor, minPoints),
-        std::size_t(std::lround(double(minPoints) * options.laterPassMinPoints)));
-    stages.push_back({options.enabled, minPoints});
-  }
-
+  const std::vector<Stage> stages = ransacStages(options, result.minPoints);
   FitScales scales = fitScales(result);
   std::vector<Surface> found;
   std::vector<std::uint32_t> subset(cloud.size());
@@ -633,7 +668,9 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     params.cluster_epsilon = result.clusterEpsilon;
     params.normal_threshold = options.normalThreshold;
     const double span = 0.9 / double(stages.size()), base = 0.05 + span * double(stage);
-    const std::function<bool(double)> cb = [&](double f) { return report(base + span * f, "ransac"); };
+    const std::function<bool(double)> cb = [&](double f) {
+      return report(base + span * f, "ransac");
+    };
     const std::function<bool(Surface&)> accept = [&](Surface& surf) {
       return selectModel(cloud, options, scales, result.epsilon, diag, surf);
     };
@@ -648,51 +685,13 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
         scales = fitScales(result);
       }
     }
-    // Settle the surfaces found so far: drop redundant ones, give every point
-    // to the surface that explains it best, re-fit. Later stages search the rest.
     result.minPoints = std::min(result.minPoints, stages[stage].minPoints);
-    result.surfaces = std::move(found);
-    result.status = Status::Ok;
-    RefineOptions settle;
-    settle.maxFitPoints = 3000;
-    // Points a surface's band reaches away from its patch stay with it until
-    // the final refinement: the later passes search the unassigned points
-    // for new surfaces, and stray noise is no help there.
-    settle.connectedPatches = false;
-    refineSurfaces(cloud, result, settle);
-    found = std::move(result.surfaces);
-    result.surfaces.clear();
-    subset.clear();
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      if (result.assignment[i] < 0) subset.push_back(std::uint32_t(i));
-    }
+    settle(cloud, result, found, subset);
   }
   if (!report(0.95, "ransac")) return cancelled();
 
   result.surfaces = std::move(found);
-  std::size_t assigned = 0;
-  std::array<int, 5> perType{};
-  for (const Surface& surf : result.surfaces) {
-    assigned += surf.inliers.size();
-    ++perType[std::size_t(surf.type())];
-  }
-  char buf[320];
-  if (result.surfaces.empty()) {
-    result.status = Status::NoSurfaces;
-    std::snprintf(buf, sizeof(buf),
-                  "no surface explains %zu or more points within %.3g (%.2g %% of the diagonal; "
-                  "estimated noise %.3g)",
-                  result.minPoints, result.epsilon, 100.0 * result.epsilon / diag, result.noise);
-  } else {
-    result.status = Status::Ok;
-    std::snprintf(buf, sizeof(buf),
-                  "%zu surfaces (%d planes, %d cylinders, %d cones, %d spheres, %d tori) explain "
-                  "%.1f %% of the points; epsilon %.3g (%.2g %% of D), estimated noise %.3g",
-                  result.surfaces.size(), perType[0], perType[1], perType[2], perType[3],
-                  perType[4], 100.0 * double(assigned) / double(cloud.size()), result.epsilon,
-                  100.0 * result.epsilon / diag, result.noise);
-  }
-  result.message = buf;
+  summarise(cloud, result);
   report(1.0, "ransac");
   return result;
 }

@@ -4,16 +4,16 @@
 /// parameters relative to the scan's bounding-box diagonal D and to its
 /// estimated noise, so clean and noisy scans need no tuning.
 
-#include "core/point_cloud.h"
-#include "core/progress.h"
-#include "core/surface.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <set>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "core/point_cloud.h"
+#include "core/progress.h"
+#include "core/surface.h"
 
 namespace csgvox {
 
@@ -23,19 +23,28 @@ struct DetectOptions {
   /// Kinds of surface looked for.
   std::set<SurfaceType> enabled = {SurfaceType::Plane, SurfaceType::Cylinder, SurfaceType::Cone,
                                    SurfaceType::Sphere, SurfaceType::Torus};
-  double epsilon = 0.005;         ///< largest distance of an inlier from its surface, fraction of D (raised by noiseFactor)
-  double noiseFactor = 2.5;       ///< epsilon is at least this many times the estimated noise sigma (ratio)
-  double maxEpsilon = 0.02;       ///< cap on the noise-raised epsilon, fraction of D
-  double clusterEpsilon = 0.01;   ///< largest gap inside one connected patch, fraction of D (raised to spacingFactor x point spacing)
-  double spacingFactor = 3.0;     ///< clusterEpsilon is at least this many times the median point spacing (ratio)
-  double normalThreshold = 0.9;   ///< smallest cosine between an inlier's normal and the surface's (RANSAC ignores the sign, the final assignment does not)
-  double minPoints = 0.002;       ///< fewest inliers of a surface, fraction of the number of points N
-  std::size_t minPointsFloor = 12;  ///< fewest inliers of a surface, count (applies when minPoints*N is smaller)
-  double probability = 0.005;     ///< RANSAC: accepted probability of overlooking the best candidate (0, 1)
-  bool staged = true;             ///< search planes and cylinders first, then cones and spheres, then tori
-  int passes = 2;                 ///< passes over all enabled types; each later pass searches the unassigned points again
-  double laterPassMinPoints = 0.5;  ///< min-points factor of each later pass relative to the previous one (ratio)
-  std::uint64_t seed = 1;         ///< random seed; the same seed and input give the same result
+  double epsilon = 0.005;  ///< largest distance of an inlier from its surface, fraction of D
+                           ///< (raised by noiseFactor)
+  double noiseFactor =
+      2.5;  ///< epsilon is at least this many times the estimated noise sigma (ratio)
+  double maxEpsilon = 0.02;      ///< cap on the noise-raised epsilon, fraction of D
+  double clusterEpsilon = 0.01;  ///< largest gap inside one connected patch, fraction of D (raised
+                                 ///< to spacingFactor x point spacing)
+  double spacingFactor =
+      3.0;  ///< clusterEpsilon is at least this many times the median point spacing (ratio)
+  double normalThreshold = 0.9;  ///< smallest cosine between an inlier's normal and the surface's
+                                 ///< (RANSAC ignores the sign, the final assignment does not)
+  double minPoints = 0.002;  ///< fewest inliers of a surface, fraction of the number of points N
+  std::size_t minPointsFloor =
+      12;  ///< fewest inliers of a surface, count (applies when minPoints*N is smaller)
+  double probability =
+      0.005;           ///< RANSAC: accepted probability of overlooking the best candidate (0, 1)
+  bool staged = true;  ///< search planes and cylinders first, then cones and spheres, then tori
+  int passes =
+      2;  ///< passes over all enabled types; each later pass searches the unassigned points again
+  double laterPassMinPoints =
+      0.5;  ///< min-points factor of each later pass relative to the previous one (ratio)
+  std::uint64_t seed = 1;  ///< random seed; the same seed and input give the same result
 };
 
 /// Surfaces found in a scan, with the point-to-surface assignment.
@@ -52,14 +61,16 @@ struct DetectionResult {
   std::vector<int> assignment;    ///< per point: index into surfaces, or -1 when unassigned
   std::vector<Vec3> centroids;    ///< per surface: mean of its inliers (pivot for regularisation)
   Status status = Status::NoSurfaces;
-  std::string message;            ///< one line: what was found, or why nothing was
-  double diagonal = 0.0;          ///< D of the scan, scan units
-  double noise = 0.0;             ///< estimated position noise sigma, scan units
-  double normalNoise = 0.0;       ///< estimated normal noise sigma, radians (measured on the first planes found)
-  double epsilon = 0.0;           ///< inlier distance used, scan units
-  double clusterEpsilon = 0.0;    ///< connectivity distance used, scan units
-  double normalThreshold = 0.9;   ///< normal agreement used (|cos|)
-  std::size_t minPoints = 0;      ///< fewest inliers a surface may keep (the last pass's minimum), count
+  std::string message;    ///< one line: what was found, or why nothing was
+  double diagonal = 0.0;  ///< D of the scan, scan units
+  double noise = 0.0;     ///< estimated position noise sigma, scan units
+  double normalNoise =
+      0.0;  ///< estimated normal noise sigma, radians (measured on the first planes found)
+  double epsilon = 0.0;          ///< inlier distance used, scan units
+  double clusterEpsilon = 0.0;   ///< connectivity distance used, scan units
+  double normalThreshold = 0.9;  ///< normal agreement used (|cos|)
+  std::size_t minPoints =
+      0;  ///< fewest inliers a surface may keep (the last pass's minimum), count
 
   /// True when status is Ok.
   bool ok() const { return status == Status::Ok; }

@@ -4,26 +4,30 @@
 /// the surface that explains them best, and a final re-fit, so the surface
 /// parameters are as exact as the scan allows.
 
-#include "core/point_cloud.h"
-#include "core/surface.h"
-#include "primitives/surface_detection.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <span>
+
+#include "core/point_cloud.h"
+#include "core/surface.h"
+#include "primitives/surface_detection.h"
 
 namespace csgvox {
 
 /// Options of refineSurfaces and fitSurface.
 struct RefineOptions {
-  double lossScale = 1.0;         ///< Huber loss scale of the orthogonal distance, in units of the detection epsilon (ratio)
-  bool useNormals = true;         ///< also fit the scan normals, weighted by their estimated noise
-  int maxIterations = 50;         ///< Levenberg-Marquardt iterations per fit (count)
-  std::size_t maxFitPoints = 5000;  ///< larger inlier sets are fitted on an even subset of this many points (count)
-  bool reassign = true;           ///< re-assign points to the nearest compatible surface, then re-fit
-  bool connectedPatches = true;   ///< the re-assignment keeps a surface's points only on its connected patches (see reassignPoints)
-  bool removeRedundant = true;    ///< drop surfaces whose points other surfaces explain as well
-  double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least this share of its inliers (fraction)
+  double lossScale = 1.0;  ///< Huber loss scale of the orthogonal distance, in units of the
+                           ///< detection epsilon (ratio)
+  bool useNormals = true;  ///< also fit the scan normals, weighted by their estimated noise
+  int maxIterations = 50;  ///< Levenberg-Marquardt iterations per fit (count)
+  std::size_t maxFitPoints =
+      5000;  ///< larger inlier sets are fitted on an even subset of this many points (count)
+  bool reassign = true;  ///< re-assign points to the nearest compatible surface, then re-fit
+  bool connectedPatches = true;    ///< the re-assignment keeps a surface's points only on its
+                                   ///< connected patches (see reassignPoints)
+  bool removeRedundant = true;     ///< drop surfaces whose points other surfaces explain as well
+  double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least
+                                   ///< this share of its inliers (fraction)
 };
 
 /// Residual scales of one fit: each point contributes its orthogonal distance
@@ -43,7 +47,7 @@ struct PointFit {
   /// directions, each divided by sqrt(normal^2 + (position x curvature)^2):
   /// about chi-square with 2 degrees of freedom for a point on the surface.
   double normal2 = 0.0;
-  double cosine = 1.0;    ///< cosine between n and the surface's oriented normal at p
+  double cosine = 1.0;  ///< cosine between n and the surface's oriented normal at p
 };
 
 /// Largest PointFit::normal2 of a point that lies on its surface: the 99.9 %
@@ -75,8 +79,8 @@ FitScales fitScales(const DetectionResult& result, const RefineOptions& options 
 /// ring radius). Does not change surface.inliers.
 /// @throw std::invalid_argument when scales.position or scales.loss is not
 ///        positive or scales.normal is negative.
-double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices,
-                  Surface& surface, const FitScales& scales, const RefineOptions& options = {});
+double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
+                  const FitScales& scales, const RefineOptions& options = {});
 
 /// A closed-form start for a surface of the given type on the points
 /// `indices` and their normals, to be polished with fitSurface: PCA plane;
@@ -86,6 +90,10 @@ double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indice
 /// half-plane. Returns false when the points do not determine the surface.
 bool initialSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices,
                     SurfaceType type, Surface& surface);
+
+/// Number of parameters of a surface type: plane 3, sphere 4, cylinder 5,
+/// cone 6, torus 7 (the simpler the type, the fewer).
+int parameterCount(SurfaceType type);
 
 /// The unit outward normal of the (unbounded) surface at p, oriented as its
 /// inliers: the plane's normal; for curved surfaces away from the axis,

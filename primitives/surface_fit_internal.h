@@ -1,0 +1,25 @@
+#pragma once
+/// Internal to surface refinement (surface_fitting.cpp, surface_starts.cpp,
+/// point_reassignment.cpp, surface_refinement.cpp): helpers they share. Not
+/// part of the public API.
+
+#include <cstdint>
+#include <span>
+
+#include "primitives/surface_refinement.h"
+
+namespace csgvox::refinement_detail {
+
+/// Orients the surface as the majority of the points' normals: plane normal
+/// flipped, or the convexity flag set.
+void orientByNormals(const PointCloud& cloud, std::span<const std::uint32_t> indices,
+                     Surface& surface);
+
+/// RMS orthogonal distance of the points to the surface (0 for no points).
+double rmsDistance(const PointCloud& cloud, std::span<const std::uint32_t> indices,
+                   const Surface& surface);
+
+/// True when the surface's parameters are finite and in their ranges.
+bool validSurface(const Surface& s);
+
+}  // namespace csgvox::refinement_detail

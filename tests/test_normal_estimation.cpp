@@ -1,0 +1,107 @@
+// Tests for primitives/normal_estimation.h on degenerate input: copies of a
+// point, a scan at one position, points on a line; and determinism across
+// thread counts. (Accuracy on spheres, boxes, tubes and the bundled scans is
+// tested with the scan reader.)
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "io/scan_reader.h"
+#include "primitives/normal_estimation.h"
+
+namespace csgvox {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The bundled flange scan, with its normals (the truth here).
+const PointCloud& flange() {
+  static const PointCloud cloud = readScan(fs::path(CSGVOX_DATA_DIR) / "flange" / "scan.ply").cloud;
+  return cloud;
+}
+
+// Fraction of estimated normals within 30 degrees of the true ones.
+double agreeingFraction(const std::vector<Vec3>& estimated, const std::vector<Vec3>& truth) {
+  std::size_t good = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) good += estimated[i].dot(truth[i]) > 0.866;
+  return double(good) / double(truth.size());
+}
+
+// The message of the std::invalid_argument that estimateNormals throws.
+std::string errorOf(PointCloud cloud, int neighbors) {
+  try {
+    estimateNormals(cloud, neighbors);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(EstimateNormals, ScanAtOnePositionIsRejectedWithOneLine) {
+  // 200 copies of one point: the jet fit of such a neighbourhood used to
+  // crash in the SVD.
+  const PointCloud cloud{std::vector<Vec3>(200, Vec3(1.0, 2.0, 3.0)), {}};
+  const std::string message = errorOf(cloud, 18);
+  EXPECT_NE(message.find("all 200 points are at the same position"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos);
+}
+
+TEST(EstimateNormals, TooFewDistinctPositionsAreRejected) {
+  // 100 points, but only 10 positions: fewer than 18 neighbours exist.
+  std::vector<Vec3> points;
+  for (int copy = 0; copy < 10; ++copy) {
+    for (int i = 0; i < 10; ++i) points.push_back(flange().points[std::size_t(i)]);
+  }
+  const std::string message = errorOf(PointCloud{points, {}}, 18);
+  EXPECT_NE(message.find("10 distinct positions among 100 points"), std::string::npos) << message;
+}
+
+TEST(EstimateNormals, PointsOnALineAreRejected) {
+  std::vector<Vec3> points;
+  for (int i = 0; i < 100; ++i) points.push_back(Vec3(1.0, 2.0, 3.0) + 0.01 * i * Vec3(1, 1, 0));
+  const std::string message = errorOf(PointCloud{points, {}}, 18);
+  EXPECT_NE(message.find("line"), std::string::npos) << message;
+}
+
+TEST(EstimateNormals, CopiesOfAPointInARealScanShareItsNormal) {
+  // The flange scan with its first point repeated (18 copies used to crash)
+  // and a point in the middle repeated: the copies change nothing.
+  PointCloud plain{flange().points, {}};
+  estimateNormals(plain, 18);
+  EXPECT_GT(agreeingFraction(plain.normals, flange().normals), 0.95);
+  for (std::size_t copies : {18, 19, 40, 300}) {
+    SCOPED_TRACE(copies);
+    PointCloud repeated{flange().points, {}};
+    repeated.points.insert(repeated.points.begin() + 5000, copies, flange().points[5000]);
+    repeated.points.insert(repeated.points.end(), copies, flange().points[0]);
+    estimateNormals(repeated, 18);
+    ASSERT_EQ(repeated.normals.size(), repeated.points.size());
+    for (std::size_t i = 0; i < repeated.size(); ++i) {
+      // Index of the point in the plain scan.
+      const std::size_t original = i < 5000                       ? i
+                                   : i < 5000 + copies            ? 5000
+                                   : i < flange().size() + copies ? i - copies
+                                                                  : 0;
+      ASSERT_EQ(repeated.normals[i], plain.normals[original]) << "point " << i;
+    }
+  }
+}
+
+TEST(EstimateNormals, SameNormalsWithAnyThreadCount) {
+  PointCloud parallel{flange().points, {}};
+  estimateNormals(parallel, 18);
+  PointCloud serial{flange().points, {}};
+  {
+    const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    estimateNormals(serial, 18);
+  }
+  EXPECT_EQ(parallel.normals, serial.normals);
+}
+
+}  // namespace
+}  // namespace csgvox
