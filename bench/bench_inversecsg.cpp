@@ -20,6 +20,7 @@
 // model becomes a row with its reason and the run goes on. The children's
 // stderr (solver warnings) is discarded.
 
+#include "core/statistics.h"
 #include "mesh/mesh_solid.h"
 #include "io/scan_reader.h"
 #include "io/mesh_files.h"
@@ -307,13 +308,6 @@ std::vector<std::string> splitList(const std::string& s) {
     if (!item.empty()) out.push_back(item);
   }
   return out;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return -1.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 int usage(const char* argv0) {

@@ -1,5 +1,7 @@
 #include "io/tree_names.h"
 
+#include "core/decimal.h"
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -79,10 +81,7 @@ std::unordered_map<const Node*, std::string> leafNames(const CsgTree& tree) {
 }
 
 std::string formatNumber(double value) {
-  if (value == 0.0) return "0";  // also turns -0 into 0
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof(buf), value);
-  return std::string(buf, res.ptr);
+  return value == 0.0 ? "0" : toDecimal(value);  // also turns -0 into 0
 }
 
 std::string formatVector(const Vec3& v) {

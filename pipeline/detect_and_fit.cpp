@@ -29,8 +29,9 @@ double secondsSince(Clock::time_point start) {
 // with most inliers, then the heaviest direction orthogonal to it within
 // two degrees. The minimal box is kept when no surface gives a direction or
 // when the aligned box is more than a quarter larger.
-OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces) {
-  const OrientedBox minimal = minimalOrientedBox(scan.points);
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces,
+                    std::uint64_t seed) {
+  const OrientedBox minimal = minimalOrientedBox(scan.points, {std::uint32_t(seed)});
   struct Direction {
     Vec3 dir;
     double weight;
@@ -127,7 +128,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   start = Clock::now();
   GridOptions go;
   go.resolution = options.resolution;
-  out.grid = VoxelGrid::around(gridBox(scan, out.detection.surfaces), go);
+  out.grid = VoxelGrid::around(gridBox(scan, out.detection.surfaces, options.seed), go);
   HypothesisOptions ho = options.hypotheses;
   ho.voxelSize = out.grid.voxelSize();
   ho.seed = std::uint32_t(options.seed);

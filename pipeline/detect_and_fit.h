@@ -53,8 +53,10 @@ struct SurfacesAndCandidates {
 /// The box the voxel grid is laid over: aligned with the heaviest surface
 /// direction (plane normal or axis) and the heaviest one orthogonal to it,
 /// or the scan's minimal oriented box when the surfaces give no direction or
-/// the aligned box is over a quarter larger.
-OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces);
+/// the aligned box is over a quarter larger. `seed` seeds the minimal box's
+/// randomised search.
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces,
+                    std::uint64_t seed = 1);
 
 /// Detects, refines and regularises the scan's surfaces, lays the voxel
 /// grid over gridBox() and builds the bounded hypotheses with the grid's
