@@ -18,6 +18,7 @@ void requireReadableFile(const fs::path& path) {
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st)) throw IoError(path.string() + ": no such file");
   if (fs::is_directory(st)) throw IoError(path.string() + ": is a directory, not a file");
+  if (!fs::is_regular_file(st)) throw IoError(path.string() + ": is not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot be opened for reading");
 }
