@@ -271,6 +271,13 @@ PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
     }
   }
   if (!ended) parseError(source, "garbled or truncated PLY header (no end_header line)");
+  for (const PlyElement& element : header.elements) {
+    // Rows without properties take no bytes: CGAL would loop over them.
+    if (element.count > 0 && element.properties.empty()) {
+      parseError(source, "garbled PLY header (element \"" + element.name + "\" declares " +
+                             std::to_string(element.count) + " rows but no properties)");
+    }
+  }
   header.dataBytes = bytesLeft(in, source);
 
   for (const PlyElement& element : header.elements) {

@@ -191,6 +191,26 @@ TEST_F(ReaderRegressionTest, PlyRowsWithMissingOrMalformedValuesNameTheLine) {
   expectError<ParseError>(face, [&] { readMesh(face); }, {"line 13"});
 }
 
+// Found by fuzz_ply_binary: an element without properties and a huge count
+// made CGAL loop over its empty rows for ever.
+TEST_F(ReaderRegressionTest, PlyElementWithoutPropertiesIsRejected) {
+  const std::string header =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element junk 999999999999999\nend_header\n";
+  std::string binary = "ply\nformat binary_little_endian 1.0\n" + header;
+  const float coords[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  binary.append(reinterpret_cast<const char*>(coords), sizeof coords);
+  const fs::path bin = write("junk.ply", binary);
+  const auto started = std::chrono::steady_clock::now();
+  expectScanError<ParseError>(bin,
+                              {"element \"junk\" declares 999999999999999 rows but no properties"});
+  expectError<ParseError>(bin, [&] { readMesh(bin); }, {"no properties"});
+  const fs::path ascii =
+      write("junk_ascii.ply", "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n");
+  expectScanError<ParseError>(ascii, {"no properties"});
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(10));
+}
+
 // ---------------------------------------------------------------------------
 // XYZ: every line is checked, not only the first.
 
