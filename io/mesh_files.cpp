@@ -1,12 +1,10 @@
 #include "io/mesh_files.h"
 
-#include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Simple_cartesian.h>
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <limits>
 #include <ostream>
 #include <stdexcept>
@@ -15,6 +13,7 @@
 
 #include "io/errors.h"
 #include "io/file_util.h"
+#include "io/mesh_readers.h"
 
 namespace csgvox {
 namespace {
@@ -152,50 +151,21 @@ void writeMesh(const std::filesystem::path& path, const TriangleMesh& mesh) {
       path, [&](std::ostream& out) { write(out, mesh); }, ext != "obj");
 }
 
-TriangleMesh readMesh(const std::filesystem::path& path) {
-  requireReadableFile(path);
-  const std::string ext = lowerExtension(path);
-  if (ext != "stl" && ext != "off" && ext != "obj" && ext != "ply") {
-    throw IoError(path.string() + ": unsupported mesh format '" + path.extension().string() +
-                  "' (expected .stl, .off, .obj or .ply)");
+TriangleMesh readMesh(std::istream& in, ScanFileType type, const std::string& source) {
+  if (type == ScanFileType::Xyz) {
+    throw std::invalid_argument("readMesh: XYZ is a point format, not a mesh format");
   }
-  using Point = CGAL::Simple_cartesian<double>::Point_3;
-  std::vector<Point> points;
-  std::vector<std::vector<std::size_t>> polygons;
-  bool ok = false;
-  try {
-    ok = CGAL::IO::read_polygon_soup(path.string(), points, polygons,
-                                     CGAL::parameters::verbose(false));
-  } catch (const std::exception& e) {
-    throw ParseError(path.string() + ": not a valid " + ext + " mesh (" + e.what() + ")");
+  const detail::PolygonSoup soup = detail::readPolygonSoup(in, type, source);
+  if (soup.points.size() > std::numeric_limits<std::uint32_t>::max()) {
+    throw ParseError(source + ": too many vertices (at most 2^32 - 1)");
   }
-  if (!ok) throw ParseError(path.string() + ": not a valid " + ext + " mesh");
-  if (points.size() > std::numeric_limits<std::uint32_t>::max()) {
-    throw ParseError(path.string() + ": too many vertices (at most 2^32 - 1)");
-  }
-
   TriangleMesh mesh;
-  mesh.vertices.reserve(points.size());
-  for (const Point& p : points) {
-    const Vec3 v(p.x(), p.y(), p.z());
-    if (!v.allFinite()) {
-      throw ParseError(path.string() + ": vertex " + std::to_string(mesh.vertices.size() + 1) +
-                       " has a non-finite coordinate");
-    }
-    mesh.vertices.push_back(v);
-  }
-  mesh.triangles.reserve(polygons.size());
-  for (std::size_t f = 0; f < polygons.size(); ++f) {
-    const std::vector<std::size_t>& polygon = polygons[f];
+  mesh.vertices = soup.points;
+  mesh.triangles.reserve(soup.polygons.size());
+  for (std::size_t f = 0; f < soup.polygons.size(); ++f) {
+    const std::vector<std::size_t>& polygon = soup.polygons[f];
     if (polygon.size() < 3) {
-      throw ParseError(path.string() + ": face " + std::to_string(f + 1) +
-                       " has fewer than 3 vertices");
-    }
-    for (const std::size_t index : polygon) {
-      if (index >= points.size()) {
-        throw ParseError(path.string() + ": face " + std::to_string(f + 1) +
-                         " refers to a missing vertex");
-      }
+      throw ParseError(source + ": face " + std::to_string(f + 1) + " has fewer than 3 vertices");
     }
     // A fan around the first corner (exact for convex polygons).
     for (std::size_t i = 1; i + 1 < polygon.size(); ++i) {
@@ -204,8 +174,19 @@ TriangleMesh readMesh(const std::filesystem::path& path) {
                                 static_cast<std::uint32_t>(polygon[i + 1])});
     }
   }
-  if (mesh.triangles.empty()) throw ParseError(path.string() + ": the mesh has no triangles");
   return mesh;
+}
+
+TriangleMesh readMesh(const std::filesystem::path& path) {
+  requireReadableFile(path);
+  const std::string ext = lowerExtension(path);
+  if (ext != "stl" && ext != "off" && ext != "obj" && ext != "ply") {
+    throw IoError(path.string() + ": unsupported mesh format '" + path.extension().string() +
+                  "' (expected .stl, .off, .obj or .ply)");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path.string() + ": cannot be opened for reading");
+  return readMesh(in, scanFileTypeFromPath(path), path.string());
 }
 
 }  // namespace csgvox

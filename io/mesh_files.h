@@ -1,10 +1,12 @@
 #pragma once
 /// Mesh files: PLY, STL and OBJ out; STL (ASCII and binary), OFF, OBJ and PLY in.
 
-#include "core/triangle_mesh.h"
-
 #include <filesystem>
 #include <iosfwd>
+#include <string>
+
+#include "core/triangle_mesh.h"
+#include "io/scan_reader.h"
 
 namespace csgvox {
 
@@ -35,10 +37,20 @@ void writeMeshObj(std::ostream& out, const TriangleMesh& mesh);
 /// (ASCII or binary), chosen by the extension. Polygons with more than three
 /// corners are split into triangle fans. STL vertices with identical
 /// coordinates are merged, so a closed STL solid reads back closed.
-/// @throw IoError when the file is missing, unreadable or has another
-///        extension.
-/// @throw ParseError when the content is not a valid mesh (bad syntax, no
-///        triangles, index out of range, non-finite coordinate).
+/// The file is read by the same strict readers as readScan's meshes.
+/// @throw IoError when the file is missing, not a regular file, unreadable
+///        or has another extension.
+/// @throw ParseError when the content is not a valid mesh (bad syntax,
+///        truncated, no faces, a face with fewer than 3 corners, index out of
+///        range, non-finite coordinate, more than 2^32 - 1 vertices).
 TriangleMesh readMesh(const std::filesystem::path& path);
+
+/// Reads a mesh of the given type from a seekable stream opened in binary
+/// mode, from position 0 to its end; `source` names the input in error
+/// messages. Otherwise as readMesh(path).
+/// @throw ParseError "<source>: ..." for invalid content (as readMesh(path)).
+/// @throw IoError when the stream cannot be read or is not seekable.
+/// @throw std::invalid_argument for ScanFileType::Xyz.
+TriangleMesh readMesh(std::istream& in, ScanFileType type, const std::string& source = "<stream>");
 
 }  // namespace csgvox

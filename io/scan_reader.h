@@ -3,13 +3,13 @@
 /// OFF, OBJ, STL) become points with unit outward normals. Normals missing
 /// from a point cloud are estimated; meshes are sampled by area.
 
-#include "core/point_cloud.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+
+#include "core/point_cloud.h"
 
 namespace csgvox {
 
@@ -17,8 +17,8 @@ namespace csgvox {
 struct ReadOptions {
   std::size_t meshSamples = 100000;  ///< points sampled from a mesh input, area-weighted (count)
   std::uint64_t seed = 1;            ///< seed of the mesh sampling; same seed, same points
-  int normalNeighbors = 18;          ///< k nearest neighbours for estimating missing normals (count, >= 6)
-  std::size_t minPoints = 100;       ///< a scan with fewer points is rejected (count)
+  int normalNeighbors = 18;  ///< k nearest neighbours for estimating missing normals (count, >= 6)
+  std::size_t minPoints = 100;  ///< a scan with fewer points is rejected (count)
 };
 
 /// What readScan found in the file.
@@ -42,24 +42,27 @@ struct Scan {
 /// Kind of scan file; readScan(path) picks it from the file's extension.
 enum class ScanFileType {
   Ply,  ///< .ply: a point cloud, or a mesh when it has a non-empty face element
-  Xyz,  ///< .xyz, .xyzn: "x y z" or "x y z nx ny nz" per line
+  Xyz,  ///< .xyz, .xyzn, .pts, .txt: "x y z" or "x y z nx ny nz" per line
   Off,  ///< .off: a polygon mesh (ASCII; OFF, COFF, NOFF, STOFF, 4OFF)
   Obj,  ///< .obj: a polygon mesh (only "v" and "f" lines matter)
   Stl,  ///< .stl: a triangle mesh, ASCII or binary
 };
 
 /// Reads a scan from a file whose type is given by its extension
-/// (case-insensitive): .ply, .xyz, .xyzn, .off, .obj, .stl.
+/// (case-insensitive): .ply, .xyz, .xyzn, .pts, .txt, .off, .obj, .stl.
 ///
 /// A point cloud keeps its points; given normals are normalised, missing
 /// normals are estimated (estimateNormals with options.normalNeighbors). A
 /// mesh yields options.meshSamples points drawn uniformly by area, each with
 /// the normal of its face, oriented outwards (consistently oriented soup,
 /// positive enclosed volume).
-/// @throw IoError "<path>: ..." when the file is missing, a directory,
+/// @throw IoError "<path>: ..." when the file is missing, a directory or
+///        another kind of file that is not a regular file (a FIFO, a device),
 ///        unreadable, or has an unsupported extension.
 /// @throw ParseError "<path>: ..." when the content is not a valid scan:
-///        empty, garbled or truncated, non-finite coordinates, zero-length
+///        empty, garbled or truncated, more data than a PLY header declares,
+///        a line with another number of values than its header or (XYZ) the
+///        first line, a word that is not a finite number, zero-length
 ///        normals, fewer than options.minPoints points, a mesh without faces
 ///        or with zero area.
 /// @throw std::invalid_argument when options are invalid (normalNeighbors

@@ -793,7 +793,7 @@ TEST_F(ScanReaderTest, RejectsMissingFilesDirectoriesAndUnknownExtensions) {
   expectError<IoError>(dir_ / "missing.ply", "no such file");
   fs::create_directories(dir_ / "folder.ply");
   expectError<IoError>(dir_ / "folder.ply", "directory");
-  expectError<IoError>(write("notes.txt", "1 2 3\n"), "unsupported");
+  expectError<IoError>(write("notes.doc", "1 2 3\n"), "unsupported");
   expectError<IoError>(write("noextension", "1 2 3\n"), "unsupported");
 }
 
@@ -822,7 +822,7 @@ TEST_F(ScanReaderTest, RejectsTruncatedPly) {
   std::string missing = ascii;
   const std::size_t firstGap = missing.find(' ', missing.find("end_header\n"));
   missing.erase(firstGap, missing.find(' ', firstGap + 1) - firstGap);  // drops " y" of vertex 1
-  expectError<ParseError>(write("missing_value.ply", missing), "truncated");
+  expectError<ParseError>(write("missing_value.ply", missing), "vertex 1 of 150 has 5 values");
   // A header promising far more vertices than the file holds.
   std::string huge = ascii;
   huge.replace(huge.find("vertex 150"), 10, "vertex 99999999999");
@@ -893,7 +893,7 @@ TEST_F(ScanReaderTest, RejectsBadNormals) {
   s.normals[17] = Vec3::Zero();
   expectError<ParseError>(write("zero.ply", makePly(s, {Data::LittleEndian, false, true})),
                           "point 18 has a zero-length");
-  expectError<ParseError>(write("zero.xyz", makeXyz(s, true)), "point 18 has a zero-length");
+  expectError<ParseError>(write("zero.xyz", makeXyz(s, true)), "line 18 has a zero-length");
   s.normals[17] = Vec3(std::numeric_limits<double>::quiet_NaN(), 1.0, 0.0);
   expectError<ParseError>(write("nan_normal.ply", makePly(s, {Data::BigEndian, true, true})),
                           "point 18 has a non-finite normal");
@@ -901,7 +901,7 @@ TEST_F(ScanReaderTest, RejectsBadNormals) {
   Sample t = samplePoints(150, Vec3::Zero(), 1.0, 2);
   std::string text = makeXyz(t, true);
   text += "0.5 0.5 0.5\n";
-  expectError<ParseError>(write("mixed.xyz", text), "point 151");
+  expectError<ParseError>(write("mixed.xyz", text), "line 151 has 3 values but line 1 has 6");
 }
 
 TEST_F(ScanReaderTest, RejectsGarbledXyz) {
@@ -913,7 +913,7 @@ TEST_F(ScanReaderTest, RejectsGarbledXyz) {
   expectError<ParseError>(write("word.xyz", text), "line " + std::to_string(line));
   expectError<ParseError>(write("five.xyz", makeXyz(s, false) + "1 2 3 4 5\n"), "line 151");
   // CGAL alone would skip this line as a point count.
-  expectError<ParseError>(write("first.xyz", "5 nan 0\n" + makeXyz(s, false)), "line 1 ");
+  expectError<ParseError>(write("first.xyz", "5 nan 0\n" + makeXyz(s, false)), "line 1:");
 }
 
 TEST_F(ScanReaderTest, RejectsTooFewPoints) {
@@ -976,7 +976,7 @@ TEST_F(ScanReaderTest, RejectsBrokenMeshFiles) {
 
   std::string plyMesh = makePlyMesh(m, Data::LittleEndian);
   expectError<ParseError>(write("cut_mesh.ply", plyMesh.substr(0, plyMesh.size() - 3)),
-                          "5 of 6 faces");
+                          "face 6 of 6");
   std::string asciiMesh = makePlyMesh(m, Data::Ascii);
   asciiMesh.replace(asciiMesh.rfind("4 "), 2, "4 9");
   expectError<ParseError>(write("index_mesh.ply", asciiMesh), "refers to vertex");

@@ -1,0 +1,7 @@
+// OBJ files: the input is the whole file.
+#include "fuzz/fuzz_input.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  csgvox::fuzz::readAsScanAndMesh(csgvox::fuzz::bytes(data, size), csgvox::ScanFileType::Obj);
+  return 0;
+}

@@ -1,0 +1,120 @@
+#include "io/point_readers.h"
+
+#include <CGAL/IO/PLY.h>
+#include <CGAL/IO/read_ply_points.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/property_map.h>
+
+#include <cmath>
+#include <istream>
+#include <iterator>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "io/reader_support.h"
+
+namespace csgvox::detail {
+namespace {
+
+using IoKernel = CGAL::Simple_cartesian<double>;
+using PointNormal = std::pair<IoKernel::Point_3, IoKernel::Vector_3>;
+
+/// Appends a point (and its normal, when given) to `cloud` after checking
+/// it; `what` names the point in messages ("point 7", "line 9").
+void addPoint(PointCloud& cloud, const Vec3& point, const Vec3* normal, const std::string& source,
+              const std::string& what) {
+  if (!point.allFinite()) parseError(source, what + " has a non-finite coordinate");
+  cloud.points.push_back(point);
+  if (!normal) return;
+  if (!normal->allFinite()) parseError(source, what + " has a non-finite normal");
+  const double length = normal->norm();
+  if (!(length > 1e-12)) parseError(source, what + " has a zero-length (or missing) normal");
+  cloud.normals.push_back(*normal / length);
+}
+
+}  // namespace
+
+PointCloud readPlyPoints(std::istream& in, const PlyHeader& header, const std::string& source) {
+  std::vector<PointNormal> rows;
+  rows.reserve(static_cast<std::size_t>(header.vertices->count));
+  rewindStream(in);
+  bool ok = false;
+  {
+    CerrCapture quiet;
+    // (CGAL takes the property handlers as rvalues only.)
+    const CGAL::First_of_pair_property_map<PointNormal> pointMap;
+    const CGAL::Second_of_pair_property_map<PointNormal> normalMap;
+    ok = guarded(source, [&] {
+      if (header.hasNormals) {
+        return CGAL::IO::read_PLY_with_properties(in, std::back_inserter(rows),
+                                                  CGAL::IO::make_ply_point_reader(pointMap),
+                                                  CGAL::IO::make_ply_normal_reader(normalMap));
+      }
+      return CGAL::IO::read_PLY_with_properties(in, std::back_inserter(rows),
+                                                CGAL::IO::make_ply_point_reader(pointMap));
+    });
+  }
+  if (rows.size() != header.vertices->count) {
+    parseError(source,
+               "PLY vertex data is truncated or holds a value that is not a finite number (read " +
+                   std::to_string(rows.size()) + " of " + std::to_string(header.vertices->count) +
+                   " vertices)");
+  }
+  if (!ok) parseError(source, "PLY data after the vertices is truncated or unreadable");
+
+  PointCloud cloud;
+  cloud.points.reserve(rows.size());
+  if (header.hasNormals) cloud.normals.reserve(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& [p, n] = rows[i];
+    const Vec3 normal(n.x(), n.y(), n.z());
+    addPoint(cloud, Vec3(p.x(), p.y(), p.z()), header.hasNormals ? &normal : nullptr, source,
+             "point " + std::to_string(i + 1));
+  }
+  return cloud;
+}
+
+PointCloud readXyzPoints(std::istream& in, const std::string& source) {
+  std::string text = slurp(in, source);
+  normalizeBlanks(text);
+  PointCloud cloud;
+  std::size_t columns = 0;      // of the first data line: 3 or 6
+  std::size_t columnsLine = 0;  // that line's number
+  std::size_t pos = 0;
+  for (std::size_t lineNumber = 1; pos < text.size(); ++lineNumber) {
+    const std::size_t end = std::min(text.find('\n', pos), text.size());
+    const std::vector<std::string_view> words =
+        splitWords(std::string_view(text.data() + pos, end - pos));
+    pos = end + 1;
+    if (words.empty() || words[0][0] == '#') continue;
+    const std::string where = "line " + std::to_string(lineNumber);
+    std::uint64_t count = 0;
+    if (lineNumber == 1 && words.size() == 1 && parseCount(words[0], count))
+      continue;  // point count
+    if (words.size() != 3 && words.size() != 6) {
+      parseError(source, where + " has " + std::to_string(words.size()) +
+                             " values; expected 3 (x y z) or 6 (x y z nx ny nz)");
+    }
+    if (columns == 0) {
+      columns = words.size();
+      columnsLine = lineNumber;
+    } else if (words.size() != columns) {
+      parseError(source, where + " has " + std::to_string(words.size()) + " values but line " +
+                             std::to_string(columnsLine) + " has " + std::to_string(columns) +
+                             "; every line must have the same columns (x y z, or x y z nx ny nz)");
+    }
+    double v[6] = {};
+    for (std::size_t i = 0; i < words.size(); ++i) {
+      if (!parseFinite(words[i], v[i])) {
+        parseError(source, where + ": \"" + std::string(words[i].substr(0, 40)) +
+                               "\" is not a finite number");
+      }
+    }
+    const Vec3 normal(v[3], v[4], v[5]);
+    addPoint(cloud, Vec3(v[0], v[1], v[2]), columns == 6 ? &normal : nullptr, source, where);
+  }
+  return cloud;
+}
+
+}  // namespace csgvox::detail
