@@ -1,5 +1,7 @@
 #include "io/mesh_files.h"
 
+#include "core/decimal.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -40,13 +42,6 @@ void requireValidIndices(const TriangleMesh& mesh) {
                                   " is out of range (" + std::to_string(n) + " vertices)");
     }
   }
-}
-
-// Appends the shortest decimal form of x that reads back as exactly x.
-void putDecimal(std::string& buffer, double x) {
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof text, x);
-  buffer.append(text, result.ptr);
 }
 
 // Large meshes are written in chunks of about this many bytes.
@@ -117,7 +112,7 @@ void writeMeshObj(std::ostream& out, const TriangleMesh& mesh) {
     buffer += "v";
     for (int k = 0; k < 3; ++k) {
       buffer += ' ';
-      putDecimal(buffer, v[k]);
+      appendDecimal(buffer, v[k]);
     }
     buffer += '\n';
     flushIfFull(out, buffer);

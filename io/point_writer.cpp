@@ -1,5 +1,7 @@
 #include "io/point_writer.h"
 
+#include "core/decimal.h"
+
 #include "io/errors.h"
 #include "io/file_util.h"
 
@@ -18,14 +20,6 @@ void checkNormals(const PointCloud& cloud) {
                                 " normals for " + std::to_string(cloud.points.size()) +
                                 " points");
   }
-}
-
-// Appends the shortest decimal text that reads back to exactly `v`.
-template <class T>
-void appendNumber(std::string& out, T v) {
-  char buf[64];
-  const auto result = std::to_chars(buf, buf + sizeof buf, v);
-  out.append(buf, result.ptr);
 }
 
 // Appends the bytes of a float in the requested byte order.
@@ -69,12 +63,12 @@ void writePly(std::ostream& out, const PointCloud& cloud, std::span<const Rgb8> 
     if (encoding == PlyEncoding::Ascii) {
       for (int v = 0; v < count; ++v) {
         if (v > 0) chunk.push_back(' ');
-        appendNumber(chunk, values[v]);
+        appendDecimal(chunk, values[v]);
       }
       if (hasColors) {
         for (std::uint8_t c : colors[i]) {
           chunk.push_back(' ');
-          appendNumber(chunk, static_cast<unsigned>(c));
+          appendDecimal(chunk, static_cast<unsigned>(c));
         }
       }
       chunk.push_back('\n');
@@ -101,12 +95,12 @@ void writeXyz(std::ostream& out, const PointCloud& cloud) {
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     for (int a = 0; a < 3; ++a) {
       if (a > 0) chunk.push_back(' ');
-      appendNumber(chunk, cloud.points[i][a]);
+      appendDecimal(chunk, cloud.points[i][a]);
     }
     if (hasNormals) {
       for (int a = 0; a < 3; ++a) {
         chunk.push_back(' ');
-        appendNumber(chunk, cloud.normals[i][a]);
+        appendDecimal(chunk, cloud.normals[i][a]);
       }
     }
     chunk.push_back('\n');

@@ -24,7 +24,12 @@ Scan readScan(std::istream& in, ScanFileType type, const std::string& source,
                      " points, too few to estimate normals from " +
                      std::to_string(options.normalNeighbors) + " neighbours");
   }
-  estimateNormals(scan.cloud, options.normalNeighbors);
+  try {
+    estimateNormals(scan.cloud, options.normalNeighbors);
+  } catch (const std::invalid_argument& e) {
+    // Points that span no surface (all at one position, on a line).
+    throw ParseError(source + ": " + e.what());
+  }
   scan.info.normalsEstimated = true;
   return scan;
 }

@@ -168,6 +168,37 @@ TEST_F(Cli, ScatteredPointsAreRefusedEarly) {
   EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
+TEST_F(Cli, RepeatedPointsWithoutNormalsAreNoCrash) {
+  // 18 or more copies of one point reached the jet fit's SVD (SIGSEGV).
+  std::string same;
+  for (int i = 0; i < 200; ++i) same += "1 2 3\n";
+  write(dir_ / "same.xyz", same);
+  expectCleanError(quoted(dir_ / "same.xyz") + " -q -o " + quoted(dir_ / "out"),
+                   (dir_ / "same.xyz").string());
+  // A real scan, without normals, whose first point is repeated 18 times.
+  const RunResult conv = run("sample " + quoted(test::dataDir() / "plate_holes" / "tree.json") +
+                                 " -q --points 4000 -o " + quoted(dir_ / "s.xyz"),
+                             dir_);
+  ASSERT_EQ(conv.code, 0) << conv.err;
+  std::istringstream lines(slurp(dir_ / "s.xyz"));
+  std::string line, points, first;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    double x, y, z;
+    words >> x >> y >> z;
+    std::ostringstream p;
+    p.precision(17);
+    p << x << " " << y << " " << z << "\n";
+    if (first.empty()) first = p.str();
+    points += p.str();
+  }
+  for (int i = 0; i < 18; ++i) points += first;
+  write(dir_ / "repeated.xyz", points);
+  const RunResult r = run(quoted(dir_ / "repeated.xyz") + " -q -o " + quoted(dir_ / "out2"), dir_);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(mainOutputsIn(dir_ / "out2"), 5);
+}
+
 TEST_F(Cli, NumericOptionsMustBeFiniteAndInRange) {
   const std::string scan = quoted(test::dataDir() / "plate_holes" / "scan.ply");
   const std::string tree = quoted(test::dataDir() / "plate_holes" / "tree.json");
