@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
 #include <system_error>
 #include <unistd.h>
 
@@ -16,6 +19,22 @@ namespace {
 std::string uniqueSuffix() {
   static std::atomic<unsigned> counter{0};
   return std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+
+// Removes the staging folders in `dir` whose names start with `prefix`,
+// followed by "<pid>-<n>", of runs that no longer exist (killed ones).
+void removeStaleStaging(const fs::path& dir, const std::string& prefix) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(prefix, 0) != 0 || !it->is_directory(ec)) continue;
+    const std::string rest = name.substr(prefix.size());
+    const long pid = std::strtol(rest.c_str(), nullptr, 10);
+    if (pid <= 0 || (::kill(pid_t(pid), 0) != 0 && errno == ESRCH)) {
+      std::error_code ignored;
+      fs::remove_all(it->path(), ignored);
+    }
+  }
 }
 
 }  // namespace
@@ -41,9 +60,11 @@ OutputSet::OutputSet(fs::path folder, std::vector<std::string> names,
     fs::path target = fs::absolute(folder_, ec).lexically_normal();
     if (target.filename().empty()) target = target.parent_path();  // "out/"
     fs::create_directories(target.parent_path(), ec);
-    staging_ = target.parent_path() /
-               ("." + target.filename().string() + ".partial-" + uniqueSuffix());
+    const std::string prefix = "." + target.filename().string() + ".partial-";
+    removeStaleStaging(target.parent_path(), prefix);
+    staging_ = target.parent_path() / (prefix + uniqueSuffix());
   } else {
+    removeStaleStaging(folder_, ".csgvox-partial-");
     staging_ = folder_ / (".csgvox-partial-" + uniqueSuffix());
   }
   if (!fs::create_directory(staging_, ec) || ec) {

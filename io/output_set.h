@@ -17,7 +17,9 @@ namespace csgvox {
 /// is inside it and commit() renames the files one by one (renames within
 /// one file system, which cannot run out of space). A killed run leaves at
 /// most the hidden staging folder (`.NAME.partial-*` beside the folder or
-/// `.csgvox-partial-*` inside it), never a partial set under the real names.
+/// `.csgvox-partial-*` inside it), never a partial set under the real names;
+/// the next run into the same folder removes the staging folders of runs
+/// that no longer exist.
 class OutputSet {
  public:
   /// Prepares to write `names` (plain file names) into `folder`.

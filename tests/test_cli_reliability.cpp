@@ -134,6 +134,18 @@ TEST_F(Cli, AKilledRunLeavesAllOutputsOrNone) {
     const int n = fs::exists(out) ? mainOutputsIn(out) : 0;
     EXPECT_TRUE(n == 0 || n == 5) << n << " of the 5 outputs";
   }
+  // The next run into the same folders removes what the killed ones left.
+  for (const int ms : {300, 1500}) {
+    const fs::path out = dir_ / ("out" + std::to_string(ms));
+    const RunResult r = run(quoted(scan) + " -q -o " + quoted(out), dir_);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(mainOutputsIn(out), 5);
+  }
+  EXPECT_EQ(otherFiles(dir_, {"out300", "out1500", "stdout.txt", "stderr.txt"}),
+            std::vector<std::string>{});
+  EXPECT_EQ(otherFiles(dir_ / "out300", {"tree.json", "tree.scad", "tree.txt", "mesh.ply",
+                                         "report.json"}),
+            std::vector<std::string>{});
 }
 
 TEST_F(Cli, PipesAndDevicesAreRefusedWithoutBlocking) {
