@@ -1,18 +1,18 @@
 // csgvox detect SCAN -o OUTDIR [--epsilon E] [--min-points M] ...
 
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
 #include "app/commands.h"
-#include "app/options.h"
 #include "app/console.h"
+#include "app/options.h"
 #include "io/errors.h"
 #include "io/output_set.h"
 #include "io/point_writer.h"
 #include "io/report.h"
 #include "io/scan_reader.h"
 #include "pipeline/detect_and_fit.h"
-
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
 
 namespace csgvox::app {
 
@@ -33,12 +33,23 @@ Rgb8 surfaceColor(int surface) {
   const double x = 1.0 - std::abs(std::fmod(h, 2.0) - 1.0);
   double r = 0, g = 0, b = 0;
   switch (int(h)) {
-    case 0: r = 1, g = x; break;
-    case 1: r = x, g = 1; break;
-    case 2: g = 1, b = x; break;
-    case 3: g = x, b = 1; break;
-    case 4: r = x, b = 1; break;
-    default: r = 1, b = x;
+    case 0:
+      r = 1, g = x;
+      break;
+    case 1:
+      r = x, g = 1;
+      break;
+    case 2:
+      g = 1, b = x;
+      break;
+    case 3:
+      g = x, b = 1;
+      break;
+    case 4:
+      r = x, b = 1;
+      break;
+    default:
+      r = 1, b = x;
   }
   const auto c = [](double v) { return std::uint8_t(40 + 215 * v); };
   return Rgb8{c(r), c(g), c(b)};
@@ -118,7 +129,8 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
                   readSeconds, found.detectSeconds, found.refineSeconds, found.regularizeSeconds,
                   found.hypothesisSeconds, total.seconds());
     console.info(buf);
-    console.info("wrote surfaces.json, candidates.json, segments.ply in " + output.folder().string());
+    console.info("wrote surfaces.json, candidates.json, segments.ply in " +
+                 output.folder().string());
     return 0;
   };
 }

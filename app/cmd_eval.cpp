@@ -1,15 +1,15 @@
 // csgvox eval TREE.json SCAN [--json]
 
+#include <cstdio>
+#include <iostream>
+
 #include "app/commands.h"
-#include "app/options.h"
 #include "app/console.h"
+#include "app/options.h"
 #include "io/report.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "mesh/fit_metrics.h"
-
-#include <cstdio>
-#include <iostream>
 
 namespace csgvox::app {
 

@@ -2,24 +2,24 @@
 // scan → surfaces → hypotheses → voxel labels → Wu's two optimisations →
 // tree.json, tree.scad, tree.txt, mesh.ply, report.json.
 
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
 #include "app/commands.h"
-#include "app/options.h"
 #include "app/console.h"
+#include "app/options.h"
 #include "io/errors.h"
+#include "io/mesh_files.h"
 #include "io/output_set.h"
 #include "io/report.h"
-#include "mesh/mesh_export.h"
 #include "io/scad_export.h"
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
-#include "io/mesh_files.h"
-#include "pipeline/reconstruct.h"
 #include "mesh/fit_metrics.h"
-
-#include <cstdio>
-#include <filesystem>
-#include <optional>
+#include "mesh/mesh_export.h"
+#include "pipeline/reconstruct.h"
 
 namespace csgvox::app {
 
@@ -72,9 +72,11 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
   app.add_option("--vote-epsilon", opt->pipeline.labels.epsilon,
                  "vote: outside when more than this fraction of neighbours face the voxel")
       ->check(inRange(0.0, 1.0));
-  app.add_option("--alpha", opt->pipeline.construct.subtree.alpha, "Weight of the fit term of Wu Eq. 4")
+  app.add_option("--alpha", opt->pipeline.construct.subtree.alpha,
+                 "Weight of the fit term of Wu Eq. 4")
       ->check(inRange(0.0, 100.0));
-  app.add_option("--beta", opt->pipeline.construct.unionChoice.beta, "Weight of the fit term of Wu Eq. 6")
+  app.add_option("--beta", opt->pipeline.construct.unionChoice.beta,
+                 "Weight of the fit term of Wu Eq. 6")
       ->check(inRange(0.0, 100.0));
   app.add_option("--time-limit", opt->pipeline.timeLimit,
                  "Seconds for the reconstruction (0: none). Detection past it fails; the "
@@ -106,13 +108,12 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     ro2.resolution = opt->resolution;
     ro2.labels.method = labelMethodFromName(opt->labelMethod);
     ro2.labels.boundary = opt->boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
-    const Reconstruction rec =
-        reconstruct(
-            scan.cloud, ro2,
-            [&](std::string_view stage, bool done, const std::string& summary) {
-              if (done) console.info(std::string(stage) + ": " + summary);
-            },
-            console.progress());
+    const Reconstruction rec = reconstruct(
+        scan.cloud, ro2,
+        [&](std::string_view stage, bool done, const std::string& summary) {
+          if (done) console.info(std::string(stage) + ": " + summary);
+        },
+        console.progress());
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
     if (rec.timeLimitHit) {
@@ -157,27 +158,26 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     report["status"] = "ok";
     report["input"] = scanJson(scanPath, scan);
     report["parameters"] = {{"res", opt->resolution},
-                                 {"seed", opt->seed},
-                                 {"label", opt->labelMethod},
-                                 {"label_boundary", opt->boundary},
-                                 {"alpha", opt->pipeline.construct.subtree.alpha},
-                                 {"beta", opt->pipeline.construct.unionChoice.beta},
-                                 {"time_limit_s", opt->pipeline.timeLimit}};
-    report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}},
-                           {"voxel_size", grid.voxelSize()}};
+                            {"seed", opt->seed},
+                            {"label", opt->labelMethod},
+                            {"label_boundary", opt->boundary},
+                            {"alpha", opt->pipeline.construct.subtree.alpha},
+                            {"beta", opt->pipeline.construct.unionChoice.beta},
+                            {"time_limit_s", opt->pipeline.timeLimit}};
+    report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}}, {"voxel_size", grid.voxelSize()}};
     const ConstructStats& st = built.stats;
     report["counts"] = {{"surfaces", det.surfaces.size()},
-                             {"hypotheses", hyp.candidates.size()},
-                             {"usable_roots", st.usableRoots},
-                             {"truncation_roots", st.truncationRoots},
-                             {"subtrees", st.subtrees},
-                             {"union_candidates", st.unionCandidates},
-                             {"chosen", st.chosen},
-                             {"proved_optimal", st.provedOptimal},
-                             {"time_limit_hit", rec.timeLimitHit}};
+                        {"hypotheses", hyp.candidates.size()},
+                        {"usable_roots", st.usableRoots},
+                        {"truncation_roots", st.truncationRoots},
+                        {"subtrees", st.subtrees},
+                        {"union_candidates", st.unionCandidates},
+                        {"chosen", st.chosen},
+                        {"proved_optimal", st.provedOptimal},
+                        {"time_limit_hit", rec.timeLimitHit}};
     report["tree"] = {{"primitives", tree.primitiveCount()},
-                           {"operations", tree.operationCount()},
-                           {"depth", tree.depth()}};
+                      {"operations", tree.operationCount()},
+                      {"depth", tree.depth()}};
     nlohmann::ordered_json metrics = {{"voxel_iou", rec.voxelIou()}};
     if (fit) {
       metrics["rmse"] = fit->rmse;

@@ -1,17 +1,17 @@
 // csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]
 
+#include <cstdio>
+
 #include "app/commands.h"
-#include "app/options.h"
 #include "app/console.h"
+#include "app/options.h"
 #include "io/errors.h"
 #include "io/file_util.h"
-#include "mesh/mesh_export.h"
+#include "io/mesh_files.h"
 #include "io/scad_export.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
-#include "io/mesh_files.h"
-
-#include <cstdio>
+#include "mesh/mesh_export.h"
 
 namespace csgvox::app {
 

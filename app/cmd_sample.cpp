@@ -1,15 +1,15 @@
 // csgvox sample TREE.json -o SCAN.ply [--points N] [--noise R] [--drop K] [--seed S]
 
+#include <cstdio>
+
 #include "app/commands.h"
-#include "app/options.h"
 #include "app/console.h"
+#include "app/options.h"
 #include "io/errors.h"
 #include "io/file_util.h"
 #include "io/point_writer.h"
 #include "io/tree_json.h"
 #include "mesh/surface_sampler.h"
-
-#include <cstdio>
 
 namespace csgvox::app {
 
@@ -41,8 +41,7 @@ Command setupSample(CLI::App& app, CommonOptions& common) {
   app.add_option("--drop-radius", opt->sample.patchRadius,
                  "Radius of each removed patch, as a fraction of the diagonal")
       ->check(inRange(1e-6, 1.0));
-  app.add_option("--seed", opt->sample.seed, "Random seed")
-      ->check(nonNegativeInteger());
+  app.add_option("--seed", opt->sample.seed, "Random seed")->check(nonNegativeInteger());
   app.add_flag("--ascii", opt->ascii, "Write ASCII PLY instead of binary");
   return [opt, &common]() -> int {
     Console console(common.quiet);

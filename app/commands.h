@@ -4,7 +4,6 @@
 /// failed step (one line on stderr), 2 bad command line.
 
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <string>
 

@@ -1,12 +1,12 @@
 #pragma once
 /// Progress and timing lines on stderr for the command-line tool.
 
-#include "core/progress.h"
-
 #include <chrono>
 #include <cstdio>
 #include <memory>
 #include <string>
+
+#include "core/progress.h"
 
 namespace csgvox::app {
 

@@ -1,10 +1,5 @@
 // csgvox: from a 3D scan of a mechanical part to a compact, editable CSG tree.
 
-#include "app/commands.h"
-#include "app/options.h"
-#include "io/errors.h"
-#include "primitives/solver_log.h"
-
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -12,6 +7,11 @@
 #include <memory>
 #include <new>
 #include <string>
+
+#include "app/commands.h"
+#include "app/options.h"
+#include "io/errors.h"
+#include "primitives/solver_log.h"
 
 namespace {
 
@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<tbb::global_control> threads;
   if (common.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                     std::size_t(common.threads));
+                                                    std::size_t(common.threads));
   }
   // One line naming the input and the problem. Library messages that do
   // not name the input get it in front.

@@ -5,7 +5,6 @@
 /// unsigned option.
 
 #include <CLI/CLI.hpp>
-
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -15,7 +14,8 @@ namespace csgvox::app {
 
 /// A finite number in [lo, hi].
 inline CLI::Validator inRange(double lo, double hi) {
-  const std::string range = "[" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]";
+  const std::string range =
+      "[" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]";
   return CLI::Validator(
       [lo, hi, range](std::string& text) -> std::string {
         const char* begin = text.c_str();

@@ -2,18 +2,17 @@
 // bundled part at several sizes: time per stage and peak memory.
 // Run: build/bench/bench_detection [data/<part>/tree.json] [noise]
 
-#include "io/tree_json.h"
-#include "mesh/surface_sampler.h"
-#include "pipeline/detect_and_fit.h"
-
-#include "bench_common.h"
-
 #include <sys/resource.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+
+#include "bench_common.h"
+#include "io/tree_json.h"
+#include "mesh/surface_sampler.h"
+#include "pipeline/detect_and_fit.h"
 
 namespace {
 

@@ -1,6 +1,6 @@
 #include "io/output_set.h"
 
-#include "io/errors.h"
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -8,7 +8,8 @@
 #include <csignal>
 #include <cstdlib>
 #include <system_error>
-#include <unistd.h>
+
+#include "io/errors.h"
 
 namespace csgvox {
 

@@ -1,10 +1,10 @@
 #include "io/report.h"
 
-#include "io/file_util.h"
-#include "io/tree_json.h"
-
 #include <cstdio>
 #include <ostream>
+
+#include "io/file_util.h"
+#include "io/tree_json.h"
 
 namespace csgvox {
 
@@ -85,7 +85,8 @@ nlohmann::ordered_json surfacesJson(const std::string& scanName, const Detection
   return j;
 }
 
-nlohmann::ordered_json candidatesJson(const std::string& scanName, const HypothesisSet& hypotheses) {
+nlohmann::ordered_json candidatesJson(const std::string& scanName,
+                                      const HypothesisSet& hypotheses) {
   nlohmann::ordered_json candidates = nlohmann::ordered_json::array();
   for (const Candidate& c : hypotheses.candidates) {
     nlohmann::ordered_json j;
@@ -98,7 +99,8 @@ nlohmann::ordered_json candidatesJson(const std::string& scanName, const Hypothe
   }
   nlohmann::ordered_json counts;
   for (std::size_t o = 0; o < kCandidateOriginCount; ++o) {
-    counts[std::string(candidateOriginName(CandidateOrigin(o)))] = hypotheses.stats.returned.count[o];
+    counts[std::string(candidateOriginName(CandidateOrigin(o)))] =
+        hypotheses.stats.returned.count[o];
   }
   nlohmann::ordered_json j;
   j["scan"] = scanName;

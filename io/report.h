@@ -2,14 +2,13 @@
 /// JSON reports (report.json, surfaces.json, candidates.json) and scan
 /// descriptions.
 
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
 #include "io/scan_reader.h"
 #include "primitives/hypotheses.h"
 #include "primitives/surface_detection.h"
-
-#include <nlohmann/json.hpp>
-
-#include <filesystem>
-#include <string>
 
 namespace csgvox {
 

@@ -65,8 +65,8 @@ void addRectangle(std::vector<Piece>& pieces, const Vec3& origin, const Vec3& a,
 
 // A face or cap in the plane through `centre` with unit in-plane axes a, b
 // and normal n, of half extents ha, hb: the part within the window.
-void addClippedFace(std::vector<Piece>& pieces, const Window& w, const Vec3& centre,
-                    const Vec3& a, const Vec3& b, const Vec3& n, double ha, double hb) {
+void addClippedFace(std::vector<Piece>& pieces, const Window& w, const Vec3& centre, const Vec3& a,
+                    const Vec3& b, const Vec3& n, double ha, double hb) {
   const Vec3 q = w.center - centre;
   if (std::abs(q.dot(n)) > w.radius) return;
   const double qa = q.dot(a), qb = q.dot(b);
@@ -99,9 +99,12 @@ std::vector<Piece> piecesNear(const Primitive& prim, const Window& w) {
     const double d = radial.norm();
     double half = std::numbers::pi;
     if (d > 0.0) {
-      const double cosHalf = (c->radius * c->radius + d * d - w.radius * w.radius) / (2.0 * c->radius * d);
-      if (cosHalf > 1.0) half = -1.0;  // the side does not reach the window
-      else if (cosHalf > -1.0) half = std::acos(cosHalf);
+      const double cosHalf =
+          (c->radius * c->radius + d * d - w.radius * w.radius) / (2.0 * c->radius * d);
+      if (cosHalf > 1.0)
+        half = -1.0;  // the side does not reach the window
+      else if (cosHalf > -1.0)
+        half = std::acos(cosHalf);
     }
     const double h0 = std::max(-0.5 * c->height, t - w.radius);
     const double h1 = std::min(0.5 * c->height, t + w.radius);
@@ -129,8 +132,9 @@ std::vector<Piece> piecesNear(const Primitive& prim, const Window& w) {
     p.frame = frameFromAxis(d > 0.0 ? Vec3(q / d) : Vec3::UnitZ());
     p.cosCap = -1.0;
     if (d > 0.0) {
-      p.cosCap = std::clamp((sp->radius * sp->radius + d * d - w.radius * w.radius) /
-                                (2.0 * sp->radius * d), -1.0, 1.0);
+      p.cosCap = std::clamp(
+          (sp->radius * sp->radius + d * d - w.radius * w.radius) / (2.0 * sp->radius * d), -1.0,
+          1.0);
     }
     p.area = 2.0 * std::numbers::pi * sp->radius * sp->radius * (1.0 - p.cosCap);
     if (p.area > 0.0) pieces.push_back(p);
@@ -191,7 +195,8 @@ Vec3 onDisc(const Mat3& frame, double r, Rng& rng) {
 // A uniformly distributed point on a piece.
 Vec3 samplePiece(const Piece& p, Rng& rng) {
   switch (p.kind) {
-    case Piece::Kind::Parallelogram: return p.origin + uniform(rng) * p.u + uniform(rng) * p.v;
+    case Piece::Kind::Parallelogram:
+      return p.origin + uniform(rng) * p.u + uniform(rng) * p.v;
     case Piece::Kind::CylinderSide: {
       const double a = p.angle0 + (p.angle1 - p.angle0) * uniform(rng);
       const double t = p.height0 + (p.height1 - p.height0) * uniform(rng);
@@ -203,9 +208,9 @@ Vec3 samplePiece(const Piece& p, Rng& rng) {
       const double z = p.cosCap + (1.0 - p.cosCap) * uniform(rng);
       const double a = kTwoPi * uniform(rng);
       const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
-      return p.origin + p.radius * (rho * (std::cos(a) * p.frame.col(0) +
-                                           std::sin(a) * p.frame.col(1)) +
-                                    z * p.frame.col(2));
+      return p.origin +
+             p.radius * (rho * (std::cos(a) * p.frame.col(0) + std::sin(a) * p.frame.col(1)) +
+                         z * p.frame.col(2));
     }
   }
   return p.origin;
@@ -221,7 +226,8 @@ Vec3 samplePoint(const SurfaceDomain& d, Rng& rng) {
   }
   const Primitive& p = *d.primitive;
   switch (p.type()) {
-    case PrimitiveType::HalfSpace: return d.origin + uniform(rng) * d.u + uniform(rng) * d.v;
+    case PrimitiveType::HalfSpace:
+      return d.origin + uniform(rng) * d.u + uniform(rng) * d.v;
     case PrimitiveType::Box: {
       const Box& b = *p.as<Box>();
       const Vec3& h = b.halfSize;
@@ -296,7 +302,7 @@ Vec3 samplePoint(const SurfaceDomain& d, Rng& rng) {
 
 struct Candidate {
   Vec3 point;
-  Vec3 normal;     // outward normal of the solid (valid when accepted)
+  Vec3 normal;  // outward normal of the solid (valid when accepted)
   int domain = 0;
   bool accepted = false;
 };
@@ -319,7 +325,7 @@ SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
     throw std::invalid_argument("drop patches must be >= 0 and the patch radius > 0");
   }
   const double diag = bounds.diagonal();
-  const double step = 1e-6 * diag;   // probe distance across the surface
+  const double step = 1e-6 * diag;  // probe distance across the surface
   const double onSurface = 1e-9 * diag;
 
   std::vector<SurfaceDomain> domains;
@@ -345,8 +351,8 @@ SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
     cands.resize(batch);
     for (Candidate& c : cands) {
       const double pick = uniform(rng) * totalArea;
-      c.domain = int(std::upper_bound(cumulative.begin(), cumulative.end(), pick) -
-                     cumulative.begin());
+      c.domain =
+          int(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
       c.domain = std::min<int>(c.domain, int(domains.size()) - 1);
       c.point = samplePoint(domains[c.domain], rng);
       c.accepted = false;
@@ -361,7 +367,7 @@ SurfaceSample sampleSurface(const CsgTree& tree, const SampleOptions& options) {
       domains[c.domain].primitive->valueAndGradient(c.point, g);
       const double len = g.norm();
       if (!(len > 0.5)) return;  // on an edge or an axis: no well-defined normal
-      const Vec3 n = -g / len;  // the primitive's outward normal
+      const Vec3 n = -g / len;   // the primitive's outward normal
       const double ahead = tree.value(c.point + step * n);
       const double behind = tree.value(c.point - step * n);
       if (ahead < 0.0 && behind > 0.0) {

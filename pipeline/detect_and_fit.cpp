@@ -1,14 +1,14 @@
 #include "pipeline/detect_and_fit.h"
 
-#include "primitives/bounding_box.h"
-#include "primitives/surface_refinement.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <stdexcept>
+
+#include "primitives/bounding_box.h"
+#include "primitives/surface_refinement.h"
 
 namespace csgvox {
 namespace {
@@ -29,8 +29,7 @@ double secondsSince(Clock::time_point start) {
 // with most inliers, then the heaviest direction orthogonal to it within
 // two degrees. The minimal box is kept when no surface gives a direction or
 // when the aligned box is more than a quarter larger.
-OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces,
-                    std::uint64_t seed) {
+OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces, std::uint64_t seed) {
   const OrientedBox minimal = minimalOrientedBox(scan.points, {std::uint32_t(seed)});
   struct Direction {
     Vec3 dir;

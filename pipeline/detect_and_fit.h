@@ -4,6 +4,12 @@
 /// refined and regularised, the voxel grid's frame, and the bounded
 /// primitive hypotheses fitted to that grid's voxel size.
 
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+
 #include "core/point_cloud.h"
 #include "core/progress.h"
 #include "primitives/hypotheses.h"
@@ -11,25 +17,20 @@
 #include "primitives/surface_detection.h"
 #include "voxel/voxel_grid.h"
 
-#include <cstdint>
-#include <functional>
-#include <span>
-#include <string>
-#include <string_view>
-
 namespace csgvox {
 
 /// Called when a stage starts and when it ends (`done`), with a one-line
 /// summary of what it produced at the end.
-using StageCallback = std::function<void(std::string_view stage, bool done,
-                                         const std::string& summary)>;
+using StageCallback =
+    std::function<void(std::string_view stage, bool done, const std::string& summary)>;
 
 /// Options of detectAndFit().
 struct DetectAndFitOptions {
-  int resolution = 64;          ///< voxels along the longest side of the grid box (8..1024)
-  std::uint64_t seed = 1;       ///< seeds detection and the hypotheses' box search
-  DetectOptions detect;         ///< surface detection (its seed is replaced by `seed`)
-  HypothesisOptions hypotheses; ///< hypotheses (voxelSize and seed are set from the grid and `seed`)
+  int resolution = 64;     ///< voxels along the longest side of the grid box (8..1024)
+  std::uint64_t seed = 1;  ///< seeds detection and the hypotheses' box search
+  DetectOptions detect;    ///< surface detection (its seed is replaced by `seed`)
+  HypothesisOptions
+      hypotheses;  ///< hypotheses (voxelSize and seed are set from the grid and `seed`)
   /// A scan whose estimated position noise is larger is refused as not the
   /// scan of a solid's surfaces (scattered points), fraction of D. The
   /// bundled noisy scans have 0.005; uniform random points in a cube 0.06.
@@ -38,14 +39,14 @@ struct DetectAndFitOptions {
 
 /// Surfaces and candidates of a scan, as the main job computes them.
 struct SurfacesAndCandidates {
-  DetectionResult detection;             ///< refined and regularised surfaces (or why none)
-  RegularizationReport regularization;   ///< what the regularisation changed
-  VoxelGrid grid;                        ///< the main job's voxel grid (its size: the fit tolerance)
-  HypothesisSet hypotheses;              ///< bounded candidates (empty unless detection.ok())
-  double detectSeconds = 0.0;            ///< RANSAC
-  double refineSeconds = 0.0;            ///< Ceres refinement
-  double regularizeSeconds = 0.0;        ///< regularisation
-  double hypothesisSeconds = 0.0;        ///< grid frame and hypotheses
+  DetectionResult detection;            ///< refined and regularised surfaces (or why none)
+  RegularizationReport regularization;  ///< what the regularisation changed
+  VoxelGrid grid;                       ///< the main job's voxel grid (its size: the fit tolerance)
+  HypothesisSet hypotheses;             ///< bounded candidates (empty unless detection.ok())
+  double detectSeconds = 0.0;           ///< RANSAC
+  double refineSeconds = 0.0;           ///< Ceres refinement
+  double regularizeSeconds = 0.0;       ///< regularisation
+  double hypothesisSeconds = 0.0;       ///< grid frame and hypotheses
 
   bool ok() const { return detection.ok(); }
 };

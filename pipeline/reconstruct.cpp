@@ -1,13 +1,13 @@
 #include "pipeline/reconstruct.h"
 
-#include "core/nearest_neighbors.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <stdexcept>
+
+#include "core/nearest_neighbors.h"
 
 namespace csgvox {
 namespace {
@@ -22,8 +22,7 @@ std::string dimsText(const VoxelGrid& grid) {
 // Times one stage, reports its start and end, and records its duration.
 class StageClock {
  public:
-  StageClock(Reconstruction& out, const StageCallback& onStage)
-      : out_(out), onStage_(onStage) {}
+  StageClock(Reconstruction& out, const StageCallback& onStage) : out_(out), onStage_(onStage) {}
   void start(std::string_view stage) {
     stage_ = stage;
     start_ = Clock::now();
@@ -97,20 +96,20 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   out.hypotheses = std::move(found.hypotheses);
   out.timeLimitHit = pastDeadline();
   if (options.memoryLimit > 0) {
-    const double perVoxel = 3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
+    const double perVoxel =
+        3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
     const double need = perVoxel * double(out.grid.voxelCount());
     if (need > double(options.memoryLimit)) {
       // Voxel count grows with the cube of the resolution.
-      const double fit = double(options.resolution) *
-                         std::cbrt(double(options.memoryLimit) / need);
+      const double fit = double(options.resolution) * std::cbrt(double(options.memoryLimit) / need);
       out.status = Reconstruction::Status::TooLarge;
       char buf[256];
       std::snprintf(buf, sizeof(buf),
                     "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
                     "than the %.1f GiB allowed; use a resolution of at most %d",
-                    options.resolution, need / double(1u << 30),
-                    out.hypotheses.candidates.size(), out.grid.voxelCount(),
-                    double(options.memoryLimit) / double(1u << 30), int(fit));
+                    options.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
+                    out.grid.voxelCount(), double(options.memoryLimit) / double(1u << 30),
+                    int(fit));
       out.message = buf;
       return out;
     }

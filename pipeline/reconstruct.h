@@ -6,31 +6,31 @@
 /// grid over the minimal oriented box → bounded hypotheses → voxel labels →
 /// description sets → Wu's two optimisations and the simplified tree.
 
-#include "optimize/csg_construction.h"
-#include "pipeline/detect_and_fit.h"
-#include "primitives/hypotheses.h"
-#include "core/point_cloud.h"
-#include "core/progress.h"
-#include "primitives/surface_detection.h"
-#include "voxel/description_sets.h"
-#include "voxel/labeling.h"
-#include "voxel/voxel_grid.h"
-
 #include <functional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "core/point_cloud.h"
+#include "core/progress.h"
+#include "optimize/csg_construction.h"
+#include "pipeline/detect_and_fit.h"
+#include "primitives/hypotheses.h"
+#include "primitives/surface_detection.h"
+#include "voxel/description_sets.h"
+#include "voxel/labeling.h"
+#include "voxel/voxel_grid.h"
+
 namespace csgvox {
 
 /// Options of reconstruct().
 struct ReconstructOptions {
-  int resolution = 64;        ///< voxels along the longest side of the part's oriented box
-  std::uint64_t seed = 1;     ///< seeds detection and hypotheses; same seed, same tree
-  DetectOptions detect;       ///< surface detection (its seed is replaced by `seed`)
-  LabelOptions labels;        ///< voxel labelling
-  ConstructOptions construct; ///< the two optimisations (snapDistance 0: one voxel)
+  int resolution = 64;         ///< voxels along the longest side of the part's oriented box
+  std::uint64_t seed = 1;      ///< seeds detection and hypotheses; same seed, same tree
+  DetectOptions detect;        ///< surface detection (its seed is replaced by `seed`)
+  LabelOptions labels;         ///< voxel labelling
+  ConstructOptions construct;  ///< the two optimisations (snapDistance 0: one voxel)
   /// Wall-clock seconds for the whole call (0: none). Detection past the
   /// limit fails (status TimedOut); after detection a limit never costs the
   /// tree: labels and description sets run to their end, and the

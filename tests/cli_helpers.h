@@ -2,10 +2,8 @@
 // Running the csgvox executable from tests: the command, its exit code and
 // output, and the Cli fixture with its one-line-error check.
 
-#include "part_list.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <array>
@@ -15,8 +13,10 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <vector>
+
+#include "part_list.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 
@@ -37,10 +37,11 @@ inline std::string slurp(const fs::path& p) {
 // Runs csgvox with `args` (shell words) in `dir`; with `timeoutSeconds`,
 // under timeout(1), so that a hang ends with exit code 124.
 inline RunResult run(const std::string& args, const fs::path& dir, int timeoutSeconds = 0) {
-  const std::string prefix = timeoutSeconds > 0 ? "timeout " + std::to_string(timeoutSeconds) + " " : "";
+  const std::string prefix =
+      timeoutSeconds > 0 ? "timeout " + std::to_string(timeoutSeconds) + " " : "";
   const std::string cmd = prefix + std::string(CSGVOX_BINARY) + " " + args + " > '" +
-                          (dir / "stdout.txt").string() + "' 2> '" +
-                          (dir / "stderr.txt").string() + "' < /dev/null";
+                          (dir / "stdout.txt").string() + "' 2> '" + (dir / "stderr.txt").string() +
+                          "' < /dev/null";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -87,7 +88,6 @@ class Cli : public ::testing::Test {
   fs::path dir_;
 };
 
-
 // An ASCII PLY of the given points and normals.
 inline std::string pointsPly(const std::vector<std::array<double, 6>>& points) {
   std::ostringstream s;
@@ -99,6 +99,5 @@ inline std::string pointsPly(const std::vector<std::array<double, 6>>& points) {
   }
   return s.str();
 }
-
 
 }  // namespace csgvox

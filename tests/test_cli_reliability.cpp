@@ -3,17 +3,17 @@
 // scattered points, NaN options, and the scans on which a good tree was
 // once lost at the last step.
 
-#include "cli_helpers.h"
-#include "part_list.h"
-
-#include <nlohmann/json.hpp>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <csignal>
-#include <fcntl.h>
+#include <nlohmann/json.hpp>
 #include <random>
-#include <sys/stat.h>
 #include <thread>
-#include <unistd.h>
+
+#include "cli_helpers.h"
+#include "part_list.h"
 
 namespace csgvox {
 namespace {
@@ -143,8 +143,8 @@ TEST_F(Cli, AKilledRunLeavesAllOutputsOrNone) {
   }
   EXPECT_EQ(otherFiles(dir_, {"out300", "out1500", "stdout.txt", "stderr.txt"}),
             std::vector<std::string>{});
-  EXPECT_EQ(otherFiles(dir_ / "out300", {"tree.json", "tree.scad", "tree.txt", "mesh.ply",
-                                         "report.json"}),
+  EXPECT_EQ(otherFiles(dir_ / "out300",
+                       {"tree.json", "tree.scad", "tree.txt", "mesh.ply", "report.json"}),
             std::vector<std::string>{});
 }
 
@@ -240,9 +240,8 @@ TEST_F(Cli, NumericOptionsMustBeFiniteAndInRange) {
 
 TEST_F(Cli, QuietMeansNoSolverLog) {
   // A noisy scan whose fits make the solver warn; -q prints nothing at all.
-  const RunResult r =
-      run(quoted(test::dataDir() / "funnel" / "scan_noisy.ply") + " -q -o " + quoted(dir_ / "o"),
-          dir_);
+  const RunResult r = run(
+      quoted(test::dataDir() / "funnel" / "scan_noisy.ply") + " -q -o " + quoted(dir_ / "o"), dir_);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");
 }

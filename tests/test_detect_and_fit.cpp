@@ -1,16 +1,15 @@
 // The shared first half of the main job: the grid's frame (gridBox) and
 // `csgvox detect` giving exactly the main job's surfaces and candidates.
 
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
 #include "cli_helpers.h"
 #include "io/report.h"
 #include "io/scan_reader.h"
 #include "pipeline/detect_and_fit.h"
 #include "pipeline/reconstruct.h"
-
-#include <nlohmann/json.hpp>
-
-#include <cmath>
-#include <numbers>
 
 namespace csgvox {
 namespace {
@@ -38,7 +37,8 @@ PointCloud boxPoints(const Mat3& axes, const Vec3& h) {
 
 TEST(GridBox, FollowsTheHeaviestSurfaceDirections) {
   // A box turned by 20 degrees about z; its faces' planes give the frame.
-  const Mat3 axes = Eigen::AngleAxisd(20.0 * std::numbers::pi / 180.0, Vec3::UnitZ()).toRotationMatrix();
+  const Mat3 axes =
+      Eigen::AngleAxisd(20.0 * std::numbers::pi / 180.0, Vec3::UnitZ()).toRotationMatrix();
   const PointCloud scan = boxPoints(axes, Vec3(10, 5, 2));
   const std::vector<Surface> surfaces = {planeWith(axes.col(2), 500), planeWith(axes.col(0), 300),
                                          planeWith(axes.col(1), 200)};
@@ -63,7 +63,8 @@ TEST(GridBox, ATiltedDirectionIsNotTakenWhenItsBoxIsMuchLarger) {
   // The only plane is tilted by 30 degrees from the box's faces: the
   // aligned box would be far larger than the minimal one, which is kept.
   const PointCloud scan = boxPoints(Mat3::Identity(), Vec3(10, 10, 10));
-  const Mat3 tilt = Eigen::AngleAxisd(30.0 * std::numbers::pi / 180.0, Vec3::UnitX()).toRotationMatrix();
+  const Mat3 tilt =
+      Eigen::AngleAxisd(30.0 * std::numbers::pi / 180.0, Vec3::UnitX()).toRotationMatrix();
   const OrientedBox box = gridBox(scan, std::vector<Surface>{planeWith(tilt.col(2), 100)});
   EXPECT_NEAR(box.halfSize.prod(), 1000.0, 1e-6);
 }
@@ -75,9 +76,8 @@ TEST_F(Cli, DetectGivesTheMainJobsSurfacesAndCandidates) {
     SCOPED_TRACE(part);
     const fs::path scanPath = test::dataDir() / part / "scan_noisy.ply";
     const fs::path out = dir_ / part;
-    const RunResult r = run("detect '" + scanPath.string() + "' -q --res 64 --seed 3 -o '" +
-                                out.string() + "'",
-                            dir_);
+    const RunResult r = run(
+        "detect '" + scanPath.string() + "' -q --res 64 --seed 3 -o '" + out.string() + "'", dir_);
     ASSERT_EQ(r.code, 0) << r.err;
     ReadOptions ro;
     ro.seed = 3;

@@ -3,15 +3,15 @@
 // each part must have a matching candidate (candidate_matching.h defines the
 // match: same type, axes within 2 degrees, visible geometry within 1 % of D).
 
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
 #include "candidate_matching.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "part_list.h"
 #include "pipeline/detect_and_fit.h"
-
-#include <gtest/gtest.h>
-
-#include <cstdio>
 
 namespace csgvox {
 namespace {

@@ -5,20 +5,19 @@
 // the reason; the test fails when one of them starts to pass, so the list
 // only shrinks.
 
-#include "io/scan_reader.h"
-#include "io/tree_json.h"
-#include "pipeline/reconstruct.h"
-#include "mesh/fit_metrics.h"
-#include "test_helpers.h"
-#include "part_list.h"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <thread>
-
 #include <cstdio>
 #include <string>
+#include <thread>
+
+#include "io/scan_reader.h"
+#include "io/tree_json.h"
+#include "mesh/fit_metrics.h"
+#include "part_list.h"
+#include "pipeline/reconstruct.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -92,8 +91,7 @@ TEST_P(ReconstructionVsTruth, VolumeAndPrimitiveCount) {
     chamfer = fit.chamfer / fit.diagonal;
   }
   const double chamferBound = c.scan == "scan.ply" ? 0.003 : 0.005;
-  const bool passes =
-      rec.ok() && iou >= 0.95 && prims <= truePrims + 2 && chamfer <= chamferBound;
+  const bool passes = rec.ok() && iou >= 0.95 && prims <= truePrims + 2 && chamfer <= chamferBound;
   std::printf("%s/%s: %s, IoU %.4f, %zu primitives (truth %zu), Chamfer %.3f %% of D\n",
               c.part.c_str(), c.scan.c_str(), rec.ok() ? "ok" : rec.message.c_str(), iou, prims,
               truePrims, 100.0 * chamfer);
@@ -177,7 +175,8 @@ TEST(Reconstruction, LimitPastDetectionStillGivesTheTree) {
   o.timeLimit = 3.0;
   const Reconstruction r =
       reconstruct(scan.cloud, o, [&](std::string_view stage, bool done, const std::string&) {
-        if (stage == "labels" && !done) std::this_thread::sleep_for(std::chrono::milliseconds(3200));
+        if (stage == "labels" && !done)
+          std::this_thread::sleep_for(std::chrono::milliseconds(3200));
       });
   ASSERT_EQ(r.status, Reconstruction::Status::Ok) << r.message;
   EXPECT_TRUE(r.timeLimitHit);

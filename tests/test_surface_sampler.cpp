@@ -1,17 +1,17 @@
-#include "core/nearest_neighbors.h"
-#include "mesh/surface_sampler.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
+#include "core/nearest_neighbors.h"
+#include "mesh/surface_sampler.h"
+
 namespace csgvox {
 namespace {
 
 CsgTree plateWithHoles() {
-  std::vector<CsgTree> ops{CsgTree::leaf(Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)},
-                                         "plate")};
+  std::vector<CsgTree> ops{
+      CsgTree::leaf(Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)}, "plate")};
   for (double x : {-30.0, 30.0}) {
     for (double y : {-20.0, 20.0}) {
       ops.push_back(CsgTree::leaf(Cylinder{Vec3(x, y, 2.5), Vec3::UnitZ(), 4.0, 7.0}));
@@ -82,9 +82,9 @@ TEST(SurfaceSampler, AreaEstimateMatchesAnalyticArea) {
 
 TEST(SurfaceSampler, InternalFacesOfTouchingOperandsAreNotSampled) {
   // Two boxes sharing the face x = 0: the shared face is inside the union.
-  const CsgTree tree = CsgTree::unite(
-      {CsgTree::leaf(Box{Vec3(-1, 0, 0), Mat3::Identity(), Vec3(1, 1, 1)}),
-       CsgTree::leaf(Box{Vec3(1, 0, 0), Mat3::Identity(), Vec3(1, 1, 1)})});
+  const CsgTree tree =
+      CsgTree::unite({CsgTree::leaf(Box{Vec3(-1, 0, 0), Mat3::Identity(), Vec3(1, 1, 1)}),
+                      CsgTree::leaf(Box{Vec3(1, 0, 0), Mat3::Identity(), Vec3(1, 1, 1)})});
   const SurfaceSample s = sampleSurface(tree, {});
   for (const Vec3& p : s.cloud.points) {
     EXPECT_FALSE(std::abs(p.x()) < 1e-9 && std::abs(p.y()) < 0.999 && std::abs(p.z()) < 0.999);
@@ -170,8 +170,8 @@ TEST(SurfaceSampler, RejectsUnsampleableTrees) {
   EXPECT_THROW(sampleSurface(CsgTree(), {}), std::invalid_argument);
   EXPECT_THROW(sampleSurface(CsgTree::leaf(HalfSpace{}), {}), std::invalid_argument);
   // Two disjoint spheres intersected: an empty solid.
-  const CsgTree empty = CsgTree::intersect({CsgTree::leaf(Sphere{Vec3(0, 0, 0), 1}),
-                                            CsgTree::leaf(Sphere{Vec3(5, 0, 0), 1})});
+  const CsgTree empty = CsgTree::intersect(
+      {CsgTree::leaf(Sphere{Vec3(0, 0, 0), 1}), CsgTree::leaf(Sphere{Vec3(5, 0, 0), 1})});
   EXPECT_THROW(sampleSurface(empty, {}), std::invalid_argument);
 }
 
@@ -181,10 +181,10 @@ TEST(SurfaceSampler, RejectsUnsampleableTrees) {
 // part, and the sampler used to give up with "no boundary to sample".
 TEST(SurfaceSampler, PrimitivesMuchWiderThanThePartAreSampledNearIt) {
   const double r = 4000.0;
-  const CsgTree tree = CsgTree::subtract(
-      {CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(5, 5, 5)}),
-       CsgTree::leaf(Cylinder{Vec3(3.0 - r, 0, 0), Vec3::UnitZ(), r, 20.0}),
-       CsgTree::leaf(Sphere{Vec3(0, 0, -5.0 - r), r + 1.0})});
+  const CsgTree tree =
+      CsgTree::subtract({CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(5, 5, 5)}),
+                         CsgTree::leaf(Cylinder{Vec3(3.0 - r, 0, 0), Vec3::UnitZ(), r, 20.0}),
+                         CsgTree::leaf(Sphere{Vec3(0, 0, -5.0 - r), r + 1.0})});
   SampleOptions o;
   o.points = 20000;
   const SurfaceSample s = sampleSurface(tree, o);

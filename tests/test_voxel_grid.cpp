@@ -1,18 +1,19 @@
 // VoxelGrid: which region of space voxel (i, j, k) is, the grid laid around
 // a box, the index <-> centre round trip and the voxel range of a box.
 
-#include "voxel/voxel_grid.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
+#include "voxel/voxel_grid.h"
+
 namespace csgvox {
 namespace {
 
 Mat3 rotation(double degrees, const Vec3& axis) {
-  return Eigen::AngleAxisd(degrees * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix();
+  return Eigen::AngleAxisd(degrees * std::numbers::pi / 180.0, axis.normalized())
+      .toRotationMatrix();
 }
 
 TEST(VoxelGrid, AroundABoxPutsTheResolutionOnTheLongestSideWithItsMargin) {
@@ -63,8 +64,7 @@ TEST(VoxelGrid, VoxelRangeHoldsEveryCentreInTheBox) {
     for (int j = 0; j < 10; ++j) {
       for (int k = 0; k < 10; ++k) {
         if (b.contains(grid.center(i, j, k))) {
-          EXPECT_TRUE(i >= lo[0] && i < hi[0] && j >= lo[1] && j < hi[1] && k >= lo[2] &&
-                      k < hi[2])
+          EXPECT_TRUE(i >= lo[0] && i < hi[0] && j >= lo[1] && j < hi[1] && k >= lo[2] && k < hi[2])
               << i << " " << j << " " << k;
         }
       }
