@@ -95,8 +95,6 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
     Console console(common.quiet);
     common.subject = opt->scan;
     const fs::path scanPath(opt->scan);
-    const fs::path inputs[] = {scanPath};
-    OutputSet output(opt->outDir, {"surfaces.json", "candidates.json", "segments.ply"}, inputs);
     Stopwatch total;
     Stopwatch watch;
     ReadOptions ro;
@@ -104,6 +102,8 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
     const Scan scan = readScan(scanPath, ro);
     const double readSeconds = watch.seconds();
     console.info("read " + scanPath.string() + ": " + describeScan(scan));
+    const fs::path inputs[] = {scanPath};
+    OutputSet output(opt->outDir, {"surfaces.json", "candidates.json", "segments.ply"}, inputs);
 
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, opt->fit);
     const DetectionResult& det = found.detection;

@@ -88,13 +88,6 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     Console console(common.quiet);
     common.subject = opt->scan;
     const fs::path scanPath(opt->scan);
-    // Outputs are checked against the input before any work, and appear
-    // together at the end or not at all.
-    const fs::path inputs[] = {scanPath};
-    OutputSet output(opt->outDir.empty()
-                         ? scanPath.parent_path() / (scanPath.stem().string() + "-csgvox")
-                         : fs::path(opt->outDir),
-                     {"tree.json", "tree.scad", "tree.txt", "mesh.ply", "report.json"}, inputs);
     nlohmann::ordered_json timings;
     Stopwatch watch;
     ReadOptions ro;
@@ -102,6 +95,13 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     const Scan scan = readScan(scanPath, ro);
     timings["read"] = watch.seconds();
     console.info("read " + scanPath.string() + ": " + describeScan(scan));
+    // Outputs are checked against the input before the reconstruction, and
+    // appear together at the end or not at all.
+    const fs::path inputs[] = {scanPath};
+    OutputSet output(opt->outDir.empty()
+                         ? scanPath.parent_path() / (scanPath.stem().string() + "-csgvox")
+                         : fs::path(opt->outDir),
+                     {"tree.json", "tree.scad", "tree.txt", "mesh.ply", "report.json"}, inputs);
 
     ReconstructOptions ro2 = opt->pipeline;
     ro2.seed = opt->seed;

@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "io/errors.h"
+#include "io/file_util.h"
 
 namespace csgvox {
 
@@ -43,15 +44,10 @@ void removeStaleStaging(const fs::path& dir, const std::string& prefix) {
 OutputSet::OutputSet(fs::path folder, std::vector<std::string> names,
                      std::span<const fs::path> inputs)
     : folder_(std::move(folder)), names_(std::move(names)) {
-  std::error_code ec;
   for (const std::string& name : names_) {
-    const fs::path target = folder_ / name;
-    for (const fs::path& input : inputs) {
-      if (fs::exists(target, ec) && fs::equivalent(target, input, ec)) {
-        throw IoError(target.string() + ": is an input of this command; refusing to overwrite it");
-      }
-    }
+    for (const fs::path& input : inputs) requireNotInput(folder_ / name, input);
   }
+  std::error_code ec;
   const fs::file_status st = fs::status(folder_, ec);
   if (fs::exists(st) && !fs::is_directory(st)) {
     throw IoError(folder_.string() + ": exists and is not a directory");

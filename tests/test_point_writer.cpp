@@ -2,6 +2,8 @@
 #include "io/point_writer.h"
 #include "io/scan_reader.h"
 
+#include "temp_dir_test.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -51,19 +53,8 @@ void expectFloatRounded(const Vec3& a, const Vec3& b) {
   for (int i = 0; i < 3; ++i) EXPECT_EQ(a[i], static_cast<double>(static_cast<float>(b[i])));
 }
 
-class PointWriterTest : public ::testing::Test {
+class PointWriterTest : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("csgvox_point_writer_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
   /// Names of the files in the test directory.
   std::vector<std::string> listing() const {
     std::vector<std::string> names;
@@ -71,7 +62,6 @@ class PointWriterTest : public ::testing::Test {
     std::sort(names.begin(), names.end());
     return names;
   }
-  fs::path dir_;
 };
 
 const PointCloud kTwoPoints{{Vec3(1.5, -2.0, 3.25), Vec3(0.1, 1e-3, -7.0)},

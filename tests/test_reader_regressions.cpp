@@ -1,6 +1,8 @@
 // Strictness of the scan and mesh readers on inputs that were accepted
 // silently, misreported or hung, and on inputs found by the fuzz targets.
 #include <fcntl.h>
+#include "temp_dir_test.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -27,28 +29,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ReaderRegressionTest : public ::testing::Test {
+class ReaderRegressionTest : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("csgvox_reader_regressions_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  fs::path write(const std::string& name, const std::string& bytes) {
-    const fs::path path = dir_ / name;
-    std::ofstream out(path, std::ios::binary);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    EXPECT_TRUE(out.good());
-    return path;
-  }
-
   /// Runs `read` expecting exception E with a one-line message that names
   /// `path` and contains every one of `keywords`.
   template <class E>
@@ -80,7 +62,6 @@ class ReaderRegressionTest : public ::testing::Test {
         path, [&] { readScan(path); }, keywords);
   }
 
-  fs::path dir_;
 };
 
 /// `n` points on a unit sphere as "x y z nx ny nz" (or "x y z") lines.

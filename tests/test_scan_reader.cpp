@@ -2,6 +2,8 @@
 #include "primitives/normal_estimation.h"
 #include "io/scan_reader.h"
 
+#include "temp_dir_test.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -342,28 +344,8 @@ std::string makePlyMesh(const BoxMesh& m, Data data, bool intLengths = false) {
 
 // ---------------------------------------------------------------------------
 
-class ScanReaderTest : public ::testing::Test {
+class ScanReaderTest : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("csgvox_scan_reader_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  fs::path write(const std::string& name, const std::string& bytes) {
-    const fs::path path = dir_ / name;
-    std::ofstream out(path, std::ios::binary);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    EXPECT_TRUE(out.good());
-    return path;
-  }
-
   /// Reads `path` expecting exception E whose single-line message names
   /// the file and contains `keyword`. Also checks nothing reached stderr.
   template <class E>
@@ -408,7 +390,6 @@ class ScanReaderTest : public ::testing::Test {
     EXPECT_NEAR(static_cast<double>(onZ) / static_cast<double>(cloud.size()), 16.0 / 28.0, 0.03);
   }
 
-  fs::path dir_;
 };
 
 // ---------------------------------------------------------------------------
