@@ -20,12 +20,6 @@
 // model becomes a row with its reason and the run goes on. The children's
 // stderr (solver warnings) is discarded.
 
-#include "core/statistics.h"
-#include "mesh/mesh_solid.h"
-#include "io/scan_reader.h"
-#include "io/mesh_files.h"
-#include "pipeline/reconstruct.h"
-
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -49,6 +43,12 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "core/statistics.h"
+#include "io/mesh_files.h"
+#include "io/scan_reader.h"
+#include "mesh/mesh_solid.h"
+#include "pipeline/reconstruct.h"
 
 namespace {
 
@@ -78,8 +78,8 @@ struct Result {
   double seconds = -1.0;           // wall time of reconstruct(), -1: not run
   long primitives = -1;
   long operations = -1;
-  double iou = -1.0;               // -1: not measured
-  std::string note;                // the message, or why the IoU is missing
+  double iou = -1.0;  // -1: not measured
+  std::string note;   // the message, or why the IoU is missing
 };
 
 double loadAverage() {
@@ -91,11 +91,16 @@ double loadAverage() {
 
 const char* statusName(Reconstruction::Status s) {
   switch (s) {
-    case Reconstruction::Status::Ok: return "Ok";
-    case Reconstruction::Status::NoSurfaces: return "NoSurfaces";
-    case Reconstruction::Status::NoCombination: return "NoCombination";
-    case Reconstruction::Status::TimedOut: return "TimedOut";
-    case Reconstruction::Status::TooLarge: return "TooLarge";
+    case Reconstruction::Status::Ok:
+      return "Ok";
+    case Reconstruction::Status::NoSurfaces:
+      return "NoSurfaces";
+    case Reconstruction::Status::NoCombination:
+      return "NoCombination";
+    case Reconstruction::Status::TimedOut:
+      return "TimedOut";
+    case Reconstruction::Status::TooLarge:
+      return "TooLarge";
   }
   return "?";
 }
@@ -266,7 +271,8 @@ Result runIsolated(const Options& opt, const std::string& model) {
     int waitMs = -1;
     if (killAfter > 0.0) {
       const double left =
-          killAfter - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+          killAfter -
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (left <= 0.0) {
         kill(child, SIGKILL);
         killed = true;
@@ -361,13 +367,15 @@ int main(int argc, char** argv) {
 
   char limitText[32] = "none";
   if (opt.timeLimit > 0.0) std::snprintf(limitText, sizeof limitText, "%g s", opt.timeLimit);
-  std::printf("InverseCSG benchmark %s: %zu models, %zu points per mesh, noise %.4f D, res %d, "
-              "time limit %s\n",
-              opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
-              limitText);
-  std::printf("time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
-              "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
-              opt.iouSamples);
+  std::printf(
+      "InverseCSG benchmark %s: %zu models, %zu points per mesh, noise %.4f D, res %d, "
+      "time limit %s\n",
+      opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
+      limitText);
+  std::printf(
+      "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
+      "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
+      opt.iouSamples);
   std::printf("load average at start: %.2f\n", loadAverage());
   std::printf("%-6s %6s %-13s %8s %5s %5s %5s %5s %7s  %s\n", "model", "faces", "status", "time_s",
               "prims", "ics_p", "ops", "ics_o", "IoU", "note");

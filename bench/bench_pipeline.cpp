@@ -10,14 +10,6 @@
 // are therefore its own: peak RSS of sampling the scan plus the pipeline
 // (pipe_MiB), and of all of it plus meshing and the fit metrics (peak_MiB).
 
-#include "mesh/mesh_export.h"
-#include "io/tree_json.h"
-#include "pipeline/reconstruct.h"
-#include "mesh/fit_metrics.h"
-#include "mesh/surface_sampler.h"
-
-#include "bench_common.h"
-
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -27,6 +19,13 @@
 #include <cstdlib>
 #include <exception>
 #include <string>
+
+#include "bench_common.h"
+#include "io/tree_json.h"
+#include "mesh/fit_metrics.h"
+#include "mesh/mesh_export.h"
+#include "mesh/surface_sampler.h"
+#include "pipeline/reconstruct.h"
 
 namespace {
 
@@ -86,11 +85,12 @@ int runRow(const CsgTree& part, std::size_t points, int resolution, double noise
     fit = seconds(t);
     if (triangles.triangles.empty() || metrics.points != scan.size()) return 1;
   }
-  std::printf("%8zu %4d %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %6zu %9.0f | %9.3f %9.3f %9.3f %9.0f",
-              points, resolution, stageSeconds(rec, "detect"), stageSeconds(rec, "hypotheses"),
-              stageSeconds(rec, "labels"), stageSeconds(rec, "description_sets"),
-              stageSeconds(rec, "optimisation"), total, cpu, rec.tree.primitiveCount(), pipelinePeak,
-              mesh, fit, rec.ok() ? total + mesh + fit : -1.0, peakMiB());
+  std::printf(
+      "%8zu %4d %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %6zu %9.0f | %9.3f %9.3f %9.3f %9.0f",
+      points, resolution, stageSeconds(rec, "detect"), stageSeconds(rec, "hypotheses"),
+      stageSeconds(rec, "labels"), stageSeconds(rec, "description_sets"),
+      stageSeconds(rec, "optimisation"), total, cpu, rec.tree.primitiveCount(), pipelinePeak, mesh,
+      fit, rec.ok() ? total + mesh + fit : -1.0, peakMiB());
   if (!rec.ok()) std::printf("  (%s)", rec.message.c_str());
   std::printf("\n");
   std::fflush(stdout);
@@ -106,12 +106,15 @@ int main(int argc, char** argv) {
   const CsgTree part = readTreeJson(std::filesystem::path(treePath));
   std::printf("part %s, noise %.4f D, %zu primitives\n", treePath.c_str(), noise,
               part.primitiveCount());
-  std::printf("pipeline stages and total (reconstruct()), wall-clock seconds; cpu_s: CPU seconds "
-              "of reconstruct(), all threads\n");
-  std::printf("then what the CLI runs after it: meshTree at res 160, evaluateFit (100k samples); "
-              "e2e = total + mesh + fit\n");
-  std::printf("peak memory per row, each row in a child process of its own "
-              "(pipe: sampling + pipeline; peak: also mesh + fit); -1: not run\n");
+  std::printf(
+      "pipeline stages and total (reconstruct()), wall-clock seconds; cpu_s: CPU seconds "
+      "of reconstruct(), all threads\n");
+  std::printf(
+      "then what the CLI runs after it: meshTree at res 160, evaluateFit (100k samples); "
+      "e2e = total + mesh + fit\n");
+  std::printf(
+      "peak memory per row, each row in a child process of its own "
+      "(pipe: sampling + pipeline; peak: also mesh + fit); -1: not run\n");
   std::printf("%8s %4s %9s %9s %9s %9s %9s %9s %9s %6s %9s | %9s %9s %9s %9s\n", "points", "res",
               "detect_s", "hypoth_s", "labels_s", "dsets_s", "optim_s", "total_s", "cpu_s", "prims",
               "pipe_MiB", "mesh160_s", "fit_s", "e2e_s", "peak_MiB");

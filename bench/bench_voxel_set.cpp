@@ -1,12 +1,12 @@
 // Throughput of the bitset operations behind the voxel optimisation, next to
 // the machine's memory copy bandwidth. Run: build/bench/bench_voxel_set
 
-#include "voxel/voxel_set.h"
-
 #include <benchmark/benchmark.h>
 
 #include <cstring>
 #include <random>
+
+#include "voxel/voxel_set.h"
 
 namespace {
 

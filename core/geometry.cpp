@@ -11,9 +11,7 @@ Aabb Aabb::everything() {
   return b;
 }
 
-bool Aabb::isBounded() const {
-  return !isEmpty() && min.allFinite() && max.allFinite();
-}
+bool Aabb::isBounded() const { return !isEmpty() && min.allFinite() && max.allFinite(); }
 
 void Aabb::extend(const Vec3& p) {
   min = min.cwiseMin(p);

@@ -22,8 +22,8 @@ struct NearestNeighbors::Impl {
 
 NearestNeighbors::NearestNeighbors(std::span<const Vec3> points) : impl_(std::make_unique<Impl>()) {
   impl_->data.points.assign(points.begin(), points.end());
-  impl_->tree = std::make_unique<Impl::Tree>(3, impl_->data,
-                                             nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  impl_->tree =
+      std::make_unique<Impl::Tree>(3, impl_->data, nanoflann::KDTreeSingleIndexAdaptorParams(16));
 }
 
 NearestNeighbors::~NearestNeighbors() = default;

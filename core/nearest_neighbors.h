@@ -1,12 +1,12 @@
 #pragma once
 /// Exact nearest-neighbour queries over a fixed set of 3D points (a k-d tree).
 
-#include "core/geometry.h"
-
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 

@@ -1,9 +1,9 @@
 #pragma once
 /// Oriented boxes: a centre, an orthonormal frame and half sizes.
 
-#include "core/geometry.h"
-
 #include <span>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 

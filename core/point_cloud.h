@@ -1,10 +1,10 @@
 #pragma once
 /// A scan: points with (optional) unit outward normals.
 
-#include "core/geometry.h"
-
 #include <cstddef>
 #include <vector>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 

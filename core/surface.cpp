@@ -44,11 +44,16 @@ double surfaceDistance(const Surface& surface, const Vec3& p) {
 
 std::string_view surfaceTypeName(SurfaceType type) {
   switch (type) {
-    case SurfaceType::Plane: return "plane";
-    case SurfaceType::Cylinder: return "cylinder";
-    case SurfaceType::Cone: return "cone";
-    case SurfaceType::Sphere: return "sphere";
-    case SurfaceType::Torus: return "torus";
+    case SurfaceType::Plane:
+      return "plane";
+    case SurfaceType::Cylinder:
+      return "cylinder";
+    case SurfaceType::Cone:
+      return "cone";
+    case SurfaceType::Sphere:
+      return "sphere";
+    case SurfaceType::Torus:
+      return "torus";
   }
   return "unknown";
 }

@@ -2,12 +2,12 @@
 /// Fitted surfaces: the unbounded surfaces detected in a scan (planes,
 /// cylinders, cones, spheres, tori), each with the scan points it explains.
 
-#include "core/geometry.h"
-
 #include <cstdint>
 #include <string_view>
 #include <variant>
 #include <vector>
+
+#include "core/geometry.h"
 
 namespace csgvox {
 

@@ -1,13 +1,14 @@
 #include "io/file_util.h"
 
-#include "io/errors.h"
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <fstream>
 #include <system_error>
-#include <unistd.h>
+
+#include "io/errors.h"
 
 namespace csgvox {
 

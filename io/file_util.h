@@ -21,8 +21,7 @@ void requireReadableFile(const std::filesystem::path& path);
 /// @throw IoError when the file cannot be created or written; rethrows what
 ///        `write` throws.
 void writeFileAtomically(const std::filesystem::path& path,
-                         const std::function<void(std::ostream&)>& write,
-                         bool binary = false);
+                         const std::function<void(std::ostream&)>& write, bool binary = false);
 
 /// Refuses to write `output` when it is the same file as `input`.
 /// @throw IoError "<output>: is the input file; refusing to overwrite it".

@@ -1,7 +1,5 @@
 #include "io/mesh_files.h"
 
-#include "core/decimal.h"
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -13,6 +11,7 @@
 #include <string>
 #include <type_traits>
 
+#include "core/decimal.h"
 #include "io/errors.h"
 #include "io/file_util.h"
 #include "io/mesh_readers.h"

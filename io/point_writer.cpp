@@ -1,15 +1,14 @@
 #include "io/point_writer.h"
 
-#include "core/decimal.h"
-
-#include "io/errors.h"
-#include "io/file_util.h"
-
 #include <bit>
 #include <charconv>
 #include <ostream>
 #include <stdexcept>
 #include <string>
+
+#include "core/decimal.h"
+#include "io/errors.h"
+#include "io/file_util.h"
 
 namespace csgvox {
 namespace {
@@ -17,8 +16,7 @@ namespace {
 void checkNormals(const PointCloud& cloud) {
   if (!cloud.normals.empty() && cloud.normals.size() != cloud.points.size()) {
     throw std::invalid_argument("point cloud has " + std::to_string(cloud.normals.size()) +
-                                " normals for " + std::to_string(cloud.points.size()) +
-                                " points");
+                                " normals for " + std::to_string(cloud.points.size()) + " points");
   }
 }
 
@@ -35,8 +33,8 @@ void writePly(std::ostream& out, const PointCloud& cloud, std::span<const Rgb8> 
               bool hasColors, PlyEncoding encoding) {
   checkNormals(cloud);
   if (hasColors && colors.size() != cloud.size()) {
-    throw std::invalid_argument("point cloud has " + std::to_string(cloud.size()) +
-                                " points but " + std::to_string(colors.size()) + " colours");
+    throw std::invalid_argument("point cloud has " + std::to_string(cloud.size()) + " points but " +
+                                std::to_string(colors.size()) + " colours");
   }
   const bool hasNormals = cloud.hasNormals();
   const char* format = encoding == PlyEncoding::Ascii                ? "ascii"
@@ -115,7 +113,8 @@ void writeXyz(std::ostream& out, const PointCloud& cloud) {
 // The stream versions report a failed stream; the file versions leave that to
 // writeFileAtomically, whose message names the file.
 void requireGood(const std::ostream& out, const char* what) {
-  if (!out) throw IoError(std::string("writing ") + what + " failed: the output stream is in error");
+  if (!out)
+    throw IoError(std::string("writing ") + what + " failed: the output stream is in error");
 }
 
 }  // namespace

@@ -1,13 +1,13 @@
 #pragma once
 /// Writing point clouds as PLY (optionally with per-point colours) and XYZ.
 
-#include "core/point_cloud.h"
-
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
 #include <span>
+
+#include "core/point_cloud.h"
 
 namespace csgvox {
 

@@ -1,8 +1,5 @@
 #include "io/scad_export.h"
 
-#include "io/file_util.h"
-#include "io/tree_names.h"
-
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -10,6 +7,9 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+
+#include "io/file_util.h"
+#include "io/tree_names.h"
 
 namespace csgvox {
 namespace {
@@ -76,8 +76,8 @@ Box canonicalBox(const Box& box) {
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
-  Aabb part;            // bounds of the bounded primitives
-  double bigSize = 0;   // edge of the boxes standing in for unbounded sets
+  Aabb part;           // bounds of the bounded primitives
+  double bigSize = 0;  // edge of the boxes standing in for unbounded sets
 
   std::string bigBox(const Mat3& frame, const Vec3& center, const Vec3& size) const {
     return translate(center) + rotateEuler(frame) + "cube(" + vec(size) + ", center = true);";
@@ -86,8 +86,7 @@ struct Writer {
   std::string body(const Primitive& p) const {
     if (const auto* h = p.as<HalfSpace>()) {
       // A slab of the half-space covering the part: its top face is the plane.
-      const Vec3 onPlane =
-          part.center() - (h->normal.dot(part.center()) - h->offset) * h->normal;
+      const Vec3 onPlane = part.center() - (h->normal.dot(part.center()) - h->offset) * h->normal;
       return bigBox(frameFromAxis(h->normal), onPlane - 0.5 * bigSize * h->normal,
                     Vec3::Constant(bigSize)) +
              "  // halfspace " + vec(h->normal) + ".x <= " + formatNumber(h->offset);
@@ -98,13 +97,13 @@ struct Writer {
              ", center = true);";
     }
     if (const auto* c = p.as<Cylinder>()) {
-      return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " +
-             formatNumber(c->height) + ", r = " + formatNumber(c->radius) + ", center = true);";
+      return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " + formatNumber(c->height) +
+             ", r = " + formatNumber(c->radius) + ", center = true);";
     }
     if (const auto* c = p.as<Cone>()) {
-      return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " +
-             formatNumber(c->height) + ", r1 = " + formatNumber(c->radiusBottom) +
-             ", r2 = " + formatNumber(c->radiusTop) + ", center = true);";
+      return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " + formatNumber(c->height) +
+             ", r1 = " + formatNumber(c->radiusBottom) + ", r2 = " + formatNumber(c->radiusTop) +
+             ", center = true);";
     }
     if (const auto* s = p.as<Sphere>()) {
       return translate(s->center) + "sphere(r = " + formatNumber(s->radius) + ");";
@@ -120,7 +119,9 @@ struct Writer {
   void node(const Node& n, int indent) const {
     const std::string pad(std::size_t(2 * indent), ' ');
     switch (n.kind) {
-      case NodeKind::Primitive: out << pad << names.at(&n) << "();\n"; return;
+      case NodeKind::Primitive:
+        out << pad << names.at(&n) << "();\n";
+        return;
       case NodeKind::Complement:
         out << pad << "difference() {\n"
             << pad << "  " << bigBox(Mat3::Identity(), part.center(), Vec3::Constant(bigSize))
@@ -163,8 +164,7 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
   w.node(*tree.root(), 0);
 }
 
-void writeScad(const std::filesystem::path& path, const CsgTree& tree,
-               const ScadOptions& options) {
+void writeScad(const std::filesystem::path& path, const CsgTree& tree, const ScadOptions& options) {
   writeFileAtomically(path, [&](std::ostream& out) { writeScad(out, tree, options); });
 }
 

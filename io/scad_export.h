@@ -4,10 +4,10 @@
 /// expression over those modules. Half-spaces and complements become large
 /// boxes clipped to the part.
 
-#include "core/csg_tree.h"
-
 #include <filesystem>
 #include <iosfwd>
+
+#include "core/csg_tree.h"
 
 namespace csgvox {
 

@@ -1,18 +1,19 @@
 #include "io/text_export.h"
 
-#include "io/file_util.h"
-#include "io/tree_names.h"
-
 #include <ostream>
 #include <set>
 #include <sstream>
+
+#include "io/file_util.h"
+#include "io/tree_names.h"
 
 namespace csgvox {
 namespace {
 
 std::string vec(const Vec3& v) { return formatVector(v); }
 
-std::string expression(const Node& node, const std::unordered_map<const Node*, std::string>& names) {
+std::string expression(const Node& node,
+                       const std::unordered_map<const Node*, std::string>& names) {
   if (node.kind == NodeKind::Primitive) return names.at(&node);
   std::string s(nodeKindName(node.kind));
   s += "(";
@@ -33,8 +34,8 @@ std::string definition(const Primitive& p) {
     if (b->axes.isIdentity(0.0)) {
       s << "identity";
     } else {
-      s << "[" << vec(b->axes.col(0)) << ", " << vec(b->axes.col(1)) << ", "
-        << vec(b->axes.col(2)) << "]";
+      s << "[" << vec(b->axes.col(0)) << ", " << vec(b->axes.col(1)) << ", " << vec(b->axes.col(2))
+        << "]";
     }
   } else if (const auto* c = p.as<Cylinder>()) {
     s << "center=" << vec(c->center) << ", axis=" << vec(c->axis)

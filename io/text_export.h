@@ -4,11 +4,11 @@
 ///   difference(union(base, boss), hole1)
 ///   base = box(center=[0, 0, 5], half_size=[40, 30, 5], axes=identity)
 
-#include "core/csg_tree.h"
-
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+
+#include "core/csg_tree.h"
 
 namespace csgvox {
 

@@ -1,14 +1,13 @@
 #include "io/tree_json.h"
 
-#include "io/errors.h"
-#include "io/file_util.h"
-
-#include <nlohmann/json.hpp>
-
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "io/errors.h"
+#include "io/file_util.h"
 
 namespace csgvox {
 namespace {
@@ -80,7 +79,8 @@ Json primitiveToJson(const Primitive& p, const std::string& name) {
 Primitive primitiveFromJson(const Json& j) {
   if (!j.at("type").is_string()) throw std::invalid_argument("\"type\" must be a string");
   switch (primitiveTypeFromName(j.at("type").get<std::string>())) {
-    case PrimitiveType::HalfSpace: return HalfSpace{readVec(j, "normal"), readNumber(j, "offset")};
+    case PrimitiveType::HalfSpace:
+      return HalfSpace{readVec(j, "normal"), readNumber(j, "offset")};
     case PrimitiveType::Box: {
       Box b;
       b.center = readVec(j, "center");
@@ -102,7 +102,8 @@ Primitive primitiveFromJson(const Json& j) {
     case PrimitiveType::Cone:
       return Cone{readVec(j, "center"), readVec(j, "axis"), readNumber(j, "radius_bottom"),
                   readNumber(j, "radius_top"), readNumber(j, "height")};
-    case PrimitiveType::Sphere: return Sphere{readVec(j, "center"), readNumber(j, "radius")};
+    case PrimitiveType::Sphere:
+      return Sphere{readVec(j, "center"), readNumber(j, "radius")};
     case PrimitiveType::Torus:
       return Torus{readVec(j, "center"), readVec(j, "axis"), readNumber(j, "major_radius"),
                    readNumber(j, "minor_radius")};

@@ -1,13 +1,12 @@
 #pragma once
 /// tree.json: the csgvox tree format (documented in README.md, "File formats").
 
-#include "core/csg_tree.h"
-
-#include <nlohmann/json_fwd.hpp>
-
 #include <filesystem>
 #include <iosfwd>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
+
+#include "core/csg_tree.h"
 
 namespace csgvox {
 

@@ -1,12 +1,12 @@
 #include "io/tree_names.h"
 
-#include "core/decimal.h"
-
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <map>
 #include <set>
+
+#include "core/decimal.h"
 
 namespace csgvox {
 namespace {

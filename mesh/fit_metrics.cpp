@@ -1,14 +1,14 @@
 #include "mesh/fit_metrics.h"
 
-#include "core/nearest_neighbors.h"
-#include "mesh/surface_sampler.h"
-
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+
+#include "core/nearest_neighbors.h"
+#include "mesh/surface_sampler.h"
 
 namespace csgvox {
 namespace {
@@ -20,7 +20,8 @@ namespace {
 // `nearestOut` receives the sample that gave the distance (whose tangent
 // plane holds p), so its normal is the surface normal seen from p.
 double surfaceDistance(const Vec3& p, const NearestNeighbors& index, const std::vector<Vec3>& pts,
-                       const std::vector<Vec3>& normals, double spacing, std::uint32_t* nearestOut) {
+                       const std::vector<Vec3>& normals, double spacing,
+                       std::uint32_t* nearestOut) {
   thread_local std::vector<std::uint32_t> near;
   index.kNearest(p, normals.empty() ? 1 : 4, near);
   if (nearestOut) *nearestOut = near.front();

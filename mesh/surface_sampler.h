@@ -2,10 +2,10 @@
 /// Uniform sampling of the boundary of a CSG solid: synthetic scans with
 /// outward normals, optional noise and scanner-like holes.
 
+#include <cstdint>
+
 #include "core/csg_tree.h"
 #include "core/point_cloud.h"
-
-#include <cstdint>
 
 namespace csgvox {
 
@@ -20,9 +20,9 @@ struct SampleOptions {
 
 /// Result of sampleSurface.
 struct SurfaceSample {
-  PointCloud cloud;           ///< points on the solid's boundary with unit outward normals
-  double surfaceArea = 0.0;   ///< Monte-Carlo estimate of the boundary's area
-  double diagonal = 0.0;      ///< D: diagonal of the tree's bounding box
+  PointCloud cloud;          ///< points on the solid's boundary with unit outward normals
+  double surfaceArea = 0.0;  ///< Monte-Carlo estimate of the boundary's area
+  double diagonal = 0.0;     ///< D: diagonal of the tree's bounding box
   /// For each point, the index (in tree.leaves() order) of the primitive whose
   /// surface it was sampled on: a ground-truth segmentation of the scan.
   std::vector<std::uint32_t> source;

@@ -36,10 +36,6 @@
 /// Leaves that are not observable (entirely hidden, e.g. a fillet ring whose
 /// every face the fillet torus removes) are reported, not matched.
 
-#include "primitives/hypotheses.h"
-#include "core/surface.h"
-#include "mesh/surface_sampler.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -49,6 +45,10 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "core/surface.h"
+#include "mesh/surface_sampler.h"
+#include "primitives/hypotheses.h"
 
 namespace csgvox::test {
 
@@ -192,8 +192,9 @@ inline GroundTruth makeGroundTruth(const CsgTree& tree, std::size_t points = 200
     // The clean positions must be the noisy points' own: check it.
     for (std::size_t i = 0; i < gt.clean.size(); ++i) {
       if ((gt.scan.points[i] - gt.clean[i]).norm() > 10.0 * noise * gt.diagonal) {
-        throw std::logic_error("makeGroundTruth: the sampler's noisy points no longer follow "
-                               "its clean ones for the same seed");
+        throw std::logic_error(
+            "makeGroundTruth: the sampler's noisy points no longer follow "
+            "its clean ones for the same seed");
       }
     }
   } else {

@@ -2,26 +2,25 @@
 // naming the file, no partial outputs, and the sample/eval/render round trip
 // on every bundled part.
 
-#include "mesh/mesh_solid.h"
-#include "io/mesh_files.h"
-#include "part_list.h"
-#include "cli_helpers.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
+#include <sys/wait.h>
 
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
-#include <sys/wait.h>
+
+#include "cli_helpers.h"
+#include "io/mesh_files.h"
+#include "mesh/mesh_solid.h"
+#include "part_list.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
-
 
 TEST_F(Cli, HelpListsTheCommands) {
   const RunResult r = run("--help", dir_);
@@ -84,15 +83,16 @@ TEST_F(Cli, BadScansGiveOneLineNamingTheFile) {
 }
 
 TEST_F(Cli, BadTreesGiveOneLineAndNoOutput) {
-  write(dir_ / "bad.json", "{\"root\": {\"type\": \"sphere\", \"radius\": -1, \"center\": [0,0,0]}}");
-  expectCleanError("sample '" + (dir_ / "bad.json").string() + "' -o '" +
-                       (dir_ / "s.ply").string() + "'",
-                   (dir_ / "bad.json").string());
+  write(dir_ / "bad.json",
+        "{\"root\": {\"type\": \"sphere\", \"radius\": -1, \"center\": [0,0,0]}}");
+  expectCleanError(
+      "sample '" + (dir_ / "bad.json").string() + "' -o '" + (dir_ / "s.ply").string() + "'",
+      (dir_ / "bad.json").string());
   EXPECT_FALSE(fs::exists(dir_ / "s.ply"));
   write(dir_ / "notjson.json", "{ this is not json");
-  expectCleanError("render '" + (dir_ / "notjson.json").string() + "' -o '" +
-                       (dir_ / "m.ply").string() + "'",
-                   (dir_ / "notjson.json").string());
+  expectCleanError(
+      "render '" + (dir_ / "notjson.json").string() + "' -o '" + (dir_ / "m.ply").string() + "'",
+      (dir_ / "notjson.json").string());
   EXPECT_FALSE(fs::exists(dir_ / "m.ply"));
 }
 
@@ -100,12 +100,12 @@ TEST_F(Cli, RenderRefusesUnknownFormatsAndOverwritingItsInput) {
   const fs::path tree = test::dataDir() / test::partNames().front() / "tree.json";
   fs::copy_file(tree, dir_ / "tree.json");
   const std::string before = slurp(dir_ / "tree.json");
-  expectCleanError("render '" + (dir_ / "tree.json").string() + "' -o '" +
-                       (dir_ / "x.docx").string() + "'",
-                   (dir_ / "x.docx").string());
-  expectCleanError("render '" + (dir_ / "tree.json").string() + "' -o '" +
-                       (dir_ / "tree.json").string() + "'",
-                   (dir_ / "tree.json").string());
+  expectCleanError(
+      "render '" + (dir_ / "tree.json").string() + "' -o '" + (dir_ / "x.docx").string() + "'",
+      (dir_ / "x.docx").string());
+  expectCleanError(
+      "render '" + (dir_ / "tree.json").string() + "' -o '" + (dir_ / "tree.json").string() + "'",
+      (dir_ / "tree.json").string());
   EXPECT_EQ(slurp(dir_ / "tree.json"), before);
 }
 
@@ -145,8 +145,9 @@ TEST_F(Cli, MainJobRefusesAScanWithoutSurfaces) {
     pts.push_back({10 * next(), 10 * next(), 10 * next(), r * std::cos(a), r * std::sin(a), z});
   }
   write(dir_ / "cloud.ply", pointsPly(pts));
-  expectCleanError("'" + (dir_ / "cloud.ply").string() + "' -q -o '" + (dir_ / "out").string() + "'",
-                   (dir_ / "cloud.ply").string());
+  expectCleanError(
+      "'" + (dir_ / "cloud.ply").string() + "' -q -o '" + (dir_ / "out").string() + "'",
+      (dir_ / "cloud.ply").string());
   EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
 }
 
@@ -156,8 +157,9 @@ TEST_F(Cli, MainJobRefusesAScanOfOnePlane) {
     for (int j = 0; j < 30; ++j) pts.push_back({double(i), double(j), 0, 0, 0, 1});
   }
   write(dir_ / "plane.ply", pointsPly(pts));
-  expectCleanError("'" + (dir_ / "plane.ply").string() + "' -q -o '" + (dir_ / "out").string() + "'",
-                   (dir_ / "plane.ply").string());
+  expectCleanError(
+      "'" + (dir_ / "plane.ply").string() + "' -q -o '" + (dir_ / "out").string() + "'",
+      (dir_ / "plane.ply").string());
   EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
 }
 
@@ -169,8 +171,8 @@ TEST_F(Cli, OpenScanIsClosedByTheWindingNumber) {
   for (int i = 0; i < 80; ++i) {
     for (int k = 0; k < 60; ++k) {
       const double a = 2.0 * 3.14159265358979 * (i + 0.5 * (k % 2)) / 80.0;
-      pts.push_back({10 * std::cos(a), 10 * std::sin(a), 40.0 * k / 59.0, std::cos(a),
-                     std::sin(a), 0});
+      pts.push_back(
+          {10 * std::cos(a), 10 * std::sin(a), 40.0 * k / 59.0, std::cos(a), std::sin(a), 0});
     }
   }
   write(dir_ / "tube.ply", pointsPly(pts));
@@ -199,9 +201,9 @@ TEST_F(Cli, ResolutionBeyondTheMemoryLimitIsRefusedBeforeLabelling) {
   // candidates, far above the 4 GiB limit; it must fail at once with the
   // largest resolution that fits, not exhaust memory.
   fs::copy_file(test::dataDir() / "housing_complex" / "scan.ply", dir_ / "scan.ply");
-  const RunResult r = run("'" + (dir_ / "scan.ply").string() + "' -q --res 1024 -o '" +
-                              (dir_ / "out").string() + "'",
-                          dir_);
+  const RunResult r = run(
+      "'" + (dir_ / "scan.ply").string() + "' -q --res 1024 -o '" + (dir_ / "out").string() + "'",
+      dir_);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("use a resolution of at most"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;

@@ -5,18 +5,18 @@
 // >= 0.95 from clean and noisy scans (0.5 % noise) with at most two
 // primitives more than the truth.
 
-#include "candidate_matching.h"
-#include "io/tree_json.h"
-#include "pipeline/reconstruct.h"
-#include "optimize/csg_construction.h"
-#include "part_list.h"
-#include "mesh/surface_sampler.h"
-#include "voxel/description_sets.h"
-#include "voxel/labeling.h"
-
 #include <gtest/gtest.h>
 
 #include <random>
+
+#include "candidate_matching.h"
+#include "io/tree_json.h"
+#include "mesh/surface_sampler.h"
+#include "optimize/csg_construction.h"
+#include "part_list.h"
+#include "pipeline/reconstruct.h"
+#include "voxel/description_sets.h"
+#include "voxel/labeling.h"
 
 namespace csgvox {
 namespace {
@@ -55,7 +55,8 @@ Rebuilt rebuild(const CsgTree& truth, double noise, LabelMethod method) {
   lo.method = method;
   const VoxelLabels labels = labelVoxels(grid, scan.cloud, lo);
   std::vector<CsgTree> candidates;
-  for (const Node* leaf : truth.leaves()) candidates.push_back(CsgTree::leaf(leaf->primitive, leaf->name));
+  for (const Node* leaf : truth.leaves())
+    candidates.push_back(CsgTree::leaf(leaf->primitive, leaf->name));
   const std::vector<DescriptionSet> d = describeAll(candidates, grid, labels);
   const Construction c = constructCsg(candidates, d, labels.inside);
   Rebuilt r{c.tree, c.stats, 0.0};
@@ -87,14 +88,17 @@ TEST_P(ConstructFromTruePrimitives, RebuildsThePart) {
   const CsgTree truth = readTreeJson(test::dataDir() / GetParam() / "tree.json");
   for (double noise : {0.0, 0.005}) {
     const Rebuilt r = rebuild(truth, noise, LabelMethod::WindingNumber);
-    ASSERT_FALSE(r.tree.empty()) << GetParam() << " noise " << noise << ": roots " << r.stats.usableRoots << "+" << r.stats.truncationRoots << ", subtrees " << r.stats.subtrees << ", union candidates " << r.stats.unionCandidates << ", chosen " << r.stats.chosen;
+    ASSERT_FALSE(r.tree.empty()) << GetParam() << " noise " << noise << ": roots "
+                                 << r.stats.usableRoots << "+" << r.stats.truncationRoots
+                                 << ", subtrees " << r.stats.subtrees << ", union candidates "
+                                 << r.stats.unionCandidates << ", chosen " << r.stats.chosen;
     const double iou = volumetricIoU(truth, r.tree, 200000, 9);
     RecordProperty(noise > 0 ? "iou_noisy" : "iou_clean", std::to_string(iou));
-    std::printf("%-18s noise %.3f: label IoU %.4f, tree IoU %.4f, %zu primitives (truth %zu), "
-                "roots %zu+%zu, subtrees %zu, chosen %zu\n",
-                GetParam().c_str(), noise, r.labelIoU, iou, r.tree.primitiveCount(),
-                truth.primitiveCount(), r.stats.usableRoots, r.stats.truncationRoots,
-                r.stats.subtrees, r.stats.chosen);
+    std::printf(
+        "%-18s noise %.3f: label IoU %.4f, tree IoU %.4f, %zu primitives (truth %zu), "
+        "roots %zu+%zu, subtrees %zu, chosen %zu\n",
+        GetParam().c_str(), noise, r.labelIoU, iou, r.tree.primitiveCount(), truth.primitiveCount(),
+        r.stats.usableRoots, r.stats.truncationRoots, r.stats.subtrees, r.stats.chosen);
     EXPECT_GE(iou, 0.95) << GetParam() << " noise " << noise << ": " << r.tree.primitiveCount();
     EXPECT_LE(r.tree.primitiveCount(), truth.primitiveCount() + 2) << GetParam();
   }

@@ -1,7 +1,7 @@
+#include <gtest/gtest.h>
+
 #include "mesh/fit_metrics.h"
 #include "mesh/surface_sampler.h"
-
-#include <gtest/gtest.h>
 
 namespace csgvox {
 namespace {

@@ -1,14 +1,13 @@
 // Tests for primitives/geometry.h: axis-aligned boxes and frames from an axis.
 
-#include "core/geometry.h"
-
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 #include <vector>
+
+#include "core/geometry.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {

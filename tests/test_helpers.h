@@ -4,10 +4,6 @@
 /// trees, an independent point-in-solid test, parametric surface samples and
 /// finite-difference gradients.
 
-#include "core/csg_tree.h"
-#include "core/geometry.h"
-#include "core/primitive.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,6 +17,10 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "core/csg_tree.h"
+#include "core/geometry.h"
+#include "core/primitive.h"
 
 namespace csgvox::test {
 

@@ -3,13 +3,6 @@
 // indirect and separator candidates, and every bundled part against its
 // ground truth (clean and noisy, axis-aligned and rotated).
 
-#include "primitives/hypotheses.h"
-
-#include "candidate_matching.h"
-#include "io/tree_json.h"
-#include "part_list.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -17,6 +10,12 @@
 #include <map>
 #include <numbers>
 #include <string>
+
+#include "candidate_matching.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "primitives/hypotheses.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {

@@ -3,23 +3,23 @@
 // bundled part, on its clean and noisy scans and on scans with holes, for both
 // labelling methods.
 
-#include "primitives/bounding_box.h"
-#include "io/scan_reader.h"
-#include "io/tree_json.h"
-#include "part_list.h"
-#include "mesh/surface_sampler.h"
-#include "voxel/labeling.h"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <map>
-#include <stdexcept>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "io/scan_reader.h"
+#include "io/tree_json.h"
+#include "mesh/surface_sampler.h"
+#include "part_list.h"
+#include "primitives/bounding_box.h"
+#include "voxel/labeling.h"
 
 namespace csgvox {
 namespace {

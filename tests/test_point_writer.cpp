@@ -1,10 +1,5 @@
-#include "io/errors.h"
-#include "io/point_writer.h"
-#include "io/scan_reader.h"
-
-#include "temp_dir_test.h"
-
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,8 +10,12 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
+
+#include "io/errors.h"
+#include "io/point_writer.h"
+#include "io/scan_reader.h"
+#include "temp_dir_test.h"
 
 namespace csgvox {
 namespace {
@@ -195,7 +194,8 @@ TEST_F(PointWriterTest, ColouredPlyRoundTrips) {
   EXPECT_EQ(static_cast<std::uint8_t>(data[27 * 100 + 25]), 155);
   const Scan scan = readScan(path);
   ASSERT_EQ(scan.cloud.size(), cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) expectFloatRounded(scan.cloud.points[i], cloud.points[i]);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    expectFloatRounded(scan.cloud.points[i], cloud.points[i]);
 }
 
 TEST_F(PointWriterTest, XyzRoundTripsExactly) {

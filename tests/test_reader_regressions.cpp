@@ -1,8 +1,6 @@
 // Strictness of the scan and mesh readers on inputs that were accepted
 // silently, misreported or hung, and on inputs found by the fuzz targets.
 #include <fcntl.h>
-#include "temp_dir_test.h"
-
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,6 +21,7 @@
 #include "io/mesh_files.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
+#include "temp_dir_test.h"
 
 namespace csgvox {
 namespace {
@@ -61,7 +60,6 @@ class ReaderRegressionTest : public test::TempDirTest {
     expectError<E>(
         path, [&] { readScan(path); }, keywords);
   }
-
 };
 
 /// `n` points on a unit sphere as "x y z nx ny nz" (or "x y z") lines.

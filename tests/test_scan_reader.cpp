@@ -1,10 +1,5 @@
-#include "io/errors.h"
-#include "primitives/normal_estimation.h"
-#include "io/scan_reader.h"
-
-#include "temp_dir_test.h"
-
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -19,8 +14,12 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
+
+#include "io/errors.h"
+#include "io/scan_reader.h"
+#include "primitives/normal_estimation.h"
+#include "temp_dir_test.h"
 
 namespace csgvox {
 namespace {
@@ -308,9 +307,10 @@ std::string makeBinaryStl(const BoxMesh& m, const std::string& headerText = "bin
 std::string makePlyMesh(const BoxMesh& m, Data data, bool intLengths = false) {
   std::string text = "ply\nformat ";
   text += data == Data::Ascii ? "ascii" : "binary_little_endian";
-  text += " 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty "
-          "float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
-          "element face 6\nproperty list ";
+  text +=
+      " 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty "
+      "float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+      "element face 6\nproperty list ";
   text += intLengths ? "int" : "uchar";
   text += " int vertex_indices\nend_header\n";
   for (const Vec3& v : m.vertices) {
@@ -382,14 +382,14 @@ class ScanReaderTest : public test::TempDirTest {
       n.cwiseAbs().maxCoeff(&axis);
       ASSERT_NEAR(std::abs(n[axis]), 1.0, 1e-9) << "normal not axis-aligned: " << n.transpose();
       const Vec3 local = (cloud.points[i] - m.center).cwiseQuotient(m.half);
-      ASSERT_NEAR(local[axis], n[axis], 1e-9) << "point " << i << " not on the face its normal names";
+      ASSERT_NEAR(local[axis], n[axis], 1e-9)
+          << "point " << i << " not on the face its normal names";
       ASSERT_LE(local.cwiseAbs().maxCoeff(), 1.0 + 1e-9);
       if (axis == 2) ++onZ;
     }
     // Area weighting: the ±z faces hold 16 of the box's 28 area units.
     EXPECT_NEAR(static_cast<double>(onZ) / static_cast<double>(cloud.size()), 16.0 / 28.0, 0.03);
   }
-
 };
 
 // ---------------------------------------------------------------------------
@@ -397,9 +397,9 @@ class ScanReaderTest : public test::TempDirTest {
 
 TEST_F(ScanReaderTest, ReadsEveryPlyEncodingAndPrecision) {
   const Sample s = samplePoints(150, Vec3(1.0, -2.0, 0.5), 3.0, 7);
-  const std::vector<std::pair<Data, std::string>> datas = {
-      {Data::Ascii, "ply-ascii"}, {Data::LittleEndian, "ply-binary-le"},
-      {Data::BigEndian, "ply-binary-be"}};
+  const std::vector<std::pair<Data, std::string>> datas = {{Data::Ascii, "ply-ascii"},
+                                                           {Data::LittleEndian, "ply-binary-le"},
+                                                           {Data::BigEndian, "ply-binary-be"}};
   for (const auto& [data, format] : datas) {
     for (bool useDouble : {false, true}) {
       for (bool extras : {false, true}) {
@@ -506,7 +506,8 @@ TEST_F(ScanReaderTest, SamplesEveryMeshFormat) {
   std::string variantOff = makeOff(m);
   variantOff.replace(0, variantOff.find(" 0\n") + 3, "COFF 8 6 0 # counts\n");
   std::string coloured;
-  for (std::size_t at = 0, end; (end = variantOff.find('\n', at)) != std::string::npos; at = end + 1) {
+  for (std::size_t at = 0, end; (end = variantOff.find('\n', at)) != std::string::npos;
+       at = end + 1) {
     coloured += variantOff.substr(at, end - at);
     coloured += at == 0 ? "\n" : " 0.5 0.5 0.5 1\n";
   }
@@ -520,7 +521,8 @@ TEST_F(ScanReaderTest, SamplesEveryMeshFormat) {
       {"box.obj", makeObj(m), "obj-mesh", 6, 8},
       {"box.stl", makeAsciiStl(m), "stl-ascii-mesh", 12, 8},
       {"box_binary.stl", makeBinaryStl(m), "stl-binary-mesh", 12, 8},
-      {"box_solid_header.stl", makeBinaryStl(m, "solid box exported by CAD"), "stl-binary-mesh", 12, 8},
+      {"box_solid_header.stl", makeBinaryStl(m, "solid box exported by CAD"), "stl-binary-mesh", 12,
+       8},
       {"box_ascii.ply", makePlyMesh(m, Data::Ascii), "ply-ascii-mesh", 6, 8},
       {"box_binary.ply", makePlyMesh(m, Data::LittleEndian), "ply-binary-le-mesh", 6, 8},
       {"box_int_lengths.ply", makePlyMesh(m, Data::LittleEndian, true), "ply-binary-le-mesh", 6, 8},
@@ -555,8 +557,8 @@ TEST_F(ScanReaderTest, OrientsInvertedAndInconsistentMeshesOutwards) {
                                 oneFlipped);
   BoxMesh allButOne = inverted;
   allButOne.reverseFace(3);
-  expectOnBoxWithOutwardNormals(readScan(write("mostly.stl", makeBinaryStl(allButOne)), options).cloud,
-                                allButOne);
+  expectOnBoxWithOutwardNormals(
+      readScan(write("mostly.stl", makeBinaryStl(allButOne)), options).cloud, allButOne);
 }
 
 TEST_F(ScanReaderTest, KeepsEachShellOrientedAsTheFileHasIt) {
@@ -596,7 +598,8 @@ TEST_F(ScanReaderTest, KeepsEachShellOrientedAsTheFileHasIt) {
     const Vec3& n = scan.cloud.normals[i];
     // Which shell, and which way its faces should point (-1: into the cavity).
     const bool far = p.x() > 20.0;
-    const bool inner = !far && ((p - outer.center).cwiseAbs().array() < outer.half.array() - 1e-6).all();
+    const bool inner =
+        !far && ((p - outer.center).cwiseAbs().array() < outer.half.array() - 1e-6).all();
     const BoxMesh& m = far ? separate : inner ? cavity : outer;
     const double sign = inner ? -1.0 : 1.0;
     ++hits[far ? 2 : inner ? 1 : 0];
@@ -887,10 +890,14 @@ TEST_F(ScanReaderTest, RejectsBadNormals) {
 
 TEST_F(ScanReaderTest, RejectsGarbledXyz) {
   const Sample s = samplePoints(150, Vec3::Zero(), 1.0, 2);
-  expectError<ParseError>(write("four.xyz", "1 2 3 4\n" + makeXyz(s, false)), "line 1 has 4 values");
+  expectError<ParseError>(write("four.xyz", "1 2 3 4\n" + makeXyz(s, false)),
+                          "line 1 has 4 values");
   std::string text = makeXyz(s, false);
   text.insert(text.find('\n', 100) + 1, "1 2 three\n");
-  const auto line = std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(text.find("three")), '\n') + 1;
+  const auto line =
+      std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(text.find("three")),
+                 '\n') +
+      1;
   expectError<ParseError>(write("word.xyz", text), "line " + std::to_string(line));
   expectError<ParseError>(write("five.xyz", makeXyz(s, false) + "1 2 3 4 5\n"), "line 151");
   // CGAL alone would skip this line as a point count.
@@ -920,10 +927,9 @@ TEST_F(ScanReaderTest, RejectsMeshesWithoutFacesOrArea) {
   std::string header(80, ' ');
   expectError<ParseError>(write("nothing_binary.stl", header + std::string(4, '\0')), "no faces");
   expectError<ParseError>(
-      write("flat.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n2 0 0\n3 0 0\n3 0 1 2\n3 1 2 3\n"),
-      "zero area");
-  expectError<ParseError>(write("point_faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 0 0\n2 0 1\n"),
-                          "zero area");
+      write("flat.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n2 0 0\n3 0 0\n3 0 1 2\n3 1 2 3\n"), "zero area");
+  expectError<ParseError>(
+      write("point_faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 0 0\n2 0 1\n"), "zero area");
   BoxMesh collapsed;
   for (Vec3& v : collapsed.vertices) v.z() = 0.0;  // every face degenerates or doubles
   for (Vec3& v : collapsed.vertices) v.y() = 0.0;
@@ -948,8 +954,9 @@ TEST_F(ScanReaderTest, RejectsBrokenMeshFiles) {
                           "out of range");
 
   // CGAL's OBJ reader lets an index one past the last vertex through.
-  expectError<ParseError>(write("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
-                          "face 1 refers to vertex 4 (counting from 1), but the file has 3 vertices");
+  expectError<ParseError>(
+      write("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
+      "face 1 refers to vertex 4 (counting from 1), but the file has 3 vertices");
   expectError<ParseError>(write("statement.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nbogus 1\nf 1 2 3\n"),
                           "line 4");
   expectError<ParseError>(write("short_vertex.obj", "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n"),
@@ -974,7 +981,8 @@ TEST_F(ScanReaderTest, RejectsBrokenMeshFiles) {
   std::string longFace = makeOff(m);
   longFace.replace(longFace.rfind("\n4 ") + 1, 1, "4294967295");
   expectError<ParseError>(write("long_face.off", longFace), "line 17");
-  expectError<ParseError>(write("binary.off", "OFF BINARY\n" + std::string(40, '\0')), "binary OFF");
+  expectError<ParseError>(write("binary.off", "OFF BINARY\n" + std::string(40, '\0')),
+                          "binary OFF");
   std::string ushortIndices = makePlyMesh(m, Data::Ascii);
   ushortIndices.replace(ushortIndices.find("uchar int"), 9, "uchar ushort");
   expectError<ParseError>(write("ushort.ply", ushortIndices), "vertex_indices");

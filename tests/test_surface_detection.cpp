@@ -2,15 +2,6 @@
 // surface_refinement.h, regularization.h) on the bundled parts and on
 // synthetic and degenerate inputs.
 
-#include "io/scan_reader.h"
-#include "io/tree_json.h"
-#include "part_list.h"
-#include "primitives/regularization.h"
-#include "primitives/surface_detection.h"
-#include "primitives/surface_refinement.h"
-#include "mesh/surface_sampler.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -23,15 +14,27 @@
 #include <string>
 #include <vector>
 
+#include "io/scan_reader.h"
+#include "io/tree_json.h"
+#include "mesh/surface_sampler.h"
+#include "part_list.h"
+#include "primitives/regularization.h"
+#include "primitives/surface_detection.h"
+#include "primitives/surface_refinement.h"
+#include "test_helpers.h"
+
 namespace csgvox::test {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kMaxAngle = 2.0 * kDeg;  // normal/axis tolerance
 constexpr double kMaxLength = 0.01;       // position/size tolerance, fraction of D
-constexpr std::size_t kVisible = 50;      // a ground-truth surface with this many sample points must be found
+constexpr std::size_t kVisible =
+    50;  // a ground-truth surface with this many sample points must be found
 
-double angleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+double angleBetween(const Vec3& a, const Vec3& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
 double axisAngle(const Vec3& a, const Vec3& b) {
   return std::atan2(a.cross(b).norm(), std::abs(a.dot(b)));
 }
@@ -73,7 +76,8 @@ struct GroundTruthSurface {
 };
 
 /// The surfaces the sample sees, from its ground-truth segmentation (`source`).
-std::vector<GroundTruthSurface> groundTruthSurfaces(const CsgTree& tree, const SurfaceSample& sample) {
+std::vector<GroundTruthSurface> groundTruthSurfaces(const CsgTree& tree,
+                                                    const SurfaceSample& sample) {
   const auto leaves = tree.leaves();
   std::map<std::pair<std::size_t, int>, GroundTruthSurface> byKey;
   std::map<std::pair<std::size_t, int>, std::size_t> outwardVotes;
@@ -331,7 +335,7 @@ TEST_P(SurfaceDetectionOnParts, FindsEveryVisibleSurfaceAndRegularisesBoxes) {
     assigned += result.surfaces[s].inliers.size();
   }
   EXPECT_EQ(assigned, std::size_t(std::count_if(result.assignment.begin(), result.assignment.end(),
-                                                 [](int a) { return a >= 0; })));
+                                                [](int a) { return a >= 0; })));
   // Most points lie on a detected surface. (Not all: edges, and in the
   // bundled scans the cone points whose sampled normal is wrong, about a
   // quarter of each cone's points; the funnel has 12 % of its points there.)
@@ -355,7 +359,8 @@ TEST_P(SurfaceDetectionOnParts, FindsEveryVisibleSurfaceAndRegularisesBoxes) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Parts, SurfaceDetectionOnParts, ::testing::ValuesIn(partScans()), caseName);
+INSTANTIATE_TEST_SUITE_P(Parts, SurfaceDetectionOnParts, ::testing::ValuesIn(partScans()),
+                         caseName);
 
 // ---------------------------------------------------------------------------
 // Refinement.
@@ -391,7 +396,8 @@ TEST(SurfaceRefinement, LowersOrKeepsTheRmsOfEverySurface) {
       after += s.rms * s.rms * double(s.inliers.size());
       nAfter += s.inliers.size();
     }
-    EXPECT_LE(std::sqrt(after / double(nAfter)), std::sqrt(before / double(nBefore)) * 1.01) << file;
+    EXPECT_LE(std::sqrt(after / double(nAfter)), std::sqrt(before / double(nBefore)) * 1.01)
+        << file;
     EXPECT_GE(double(nAfter), 0.99 * double(nBefore)) << file;
   }
 }
@@ -434,7 +440,8 @@ std::vector<double> parameters(const Surface& s) {
   std::vector<double> v;
   const auto add = [&](const Vec3& x) { v.insert(v.end(), {x.x(), x.y(), x.z()}); };
   if (const auto* p = s.as<PlaneSurface>()) add(p->normal), v.push_back(p->offset);
-  if (const auto* c = s.as<CylinderSurface>()) add(c->axisPoint), add(c->axisDir), v.push_back(c->radius);
+  if (const auto* c = s.as<CylinderSurface>())
+    add(c->axisPoint), add(c->axisDir), v.push_back(c->radius);
   if (const auto* c = s.as<ConeSurface>()) add(c->apex), add(c->axisDir), v.push_back(c->halfAngle);
   if (const auto* c = s.as<SphereSurface>()) add(c->center), v.push_back(c->radius);
   if (const auto* t = s.as<TorusSurface>()) {
@@ -503,9 +510,8 @@ TEST(SurfaceDetection, ReportsProgressAndCanBeCancelled) {
   EXPECT_EQ(fractions.back(), 1.0);
 
   int calls = 0;
-  const DetectionResult cancelled = detectSurfaces(scan.cloud, {}, [&](double, std::string_view) {
-    return ++calls < 3;
-  });
+  const DetectionResult cancelled =
+      detectSurfaces(scan.cloud, {}, [&](double, std::string_view) { return ++calls < 3; });
   EXPECT_EQ(cancelled.status, DetectionResult::Status::Cancelled);
   EXPECT_FALSE(cancelled.message.empty());
 }
@@ -651,15 +657,16 @@ TEST(Regularization, SnapsAFrameOfTheDataExactly) {
     r.surfaces.push_back(planeSurface(tilt(-f.col(2), 1.4, rng), 2.0, 400));
     // 10 degrees from the third axis, towards the bisector of the others:
     // neither parallel nor orthogonal to any face.
-    const Vec3 free = std::cos(10 * kDeg) * f.col(2) +
-                      std::sin(10 * kDeg) * (f.col(0) + f.col(1)).normalized();
+    const Vec3 free =
+        std::cos(10 * kDeg) * f.col(2) + std::sin(10 * kDeg) * (f.col(0) + f.col(1)).normalized();
     r.surfaces.push_back(planeSurface(free, 1.0, 300));
     r.surfaces.push_back(cylinderSurface(Vec3(1, 1, 1), tilt(f.col(2), 1.0, rng), 1.5, 200));
     finish(r);
     const RegularizationReport report = regularizeSurfaces(r);
     ASSERT_EQ(r.surfaces.size(), 8u);
     std::vector<Vec3> dirs;
-    for (int s = 0; s < 6; ++s) dirs.push_back(r.surfaces[std::size_t(s)].as<PlaneSurface>()->normal);
+    for (int s = 0; s < 6; ++s)
+      dirs.push_back(r.surfaces[std::size_t(s)].as<PlaneSurface>()->normal);
     dirs.push_back(r.surfaces[7].as<CylinderSurface>()->axisDir);
     for (std::size_t a = 0; a < dirs.size(); ++a) {
       for (std::size_t b = a + 1; b < dirs.size(); ++b) {
@@ -680,9 +687,9 @@ TEST(Regularization, MergesCoplanarPlanesAndSnapsAxesAndRadii) {
   const Vec3 n = f.col(2);
   DetectionResult r;
   r.surfaces.push_back(planeSurface(n, 3.0, 1000));
-  r.surfaces.push_back(planeSurface(tilt(n, 0.5, rng), 3.2, 200));   // coplanar within epsilon
-  r.surfaces.push_back(planeSurface(n, 8.0, 300));                   // parallel, 5 units away
-  r.surfaces.push_back(planeSurface(-n, -3.1, 100));                 // coplanar but facing the other way
+  r.surfaces.push_back(planeSurface(tilt(n, 0.5, rng), 3.2, 200));  // coplanar within epsilon
+  r.surfaces.push_back(planeSurface(n, 8.0, 300));                  // parallel, 5 units away
+  r.surfaces.push_back(planeSurface(-n, -3.1, 100));  // coplanar but facing the other way
   const Vec3 axisPoint = 2.0 * f.col(0);
   r.surfaces.push_back(cylinderSurface(axisPoint, n, 4.0, 500));
   r.surfaces.push_back(cylinderSurface(axisPoint + 0.3 * f.col(1), tilt(n, 1.0, rng), 2.0, 400));

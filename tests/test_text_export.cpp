@@ -1,9 +1,9 @@
-#include "io/text_export.h"
-#include "io/tree_names.h"
-
 #include <gtest/gtest.h>
 
 #include <sstream>
+
+#include "io/text_export.h"
+#include "io/tree_names.h"
 
 namespace csgvox {
 namespace {
@@ -22,8 +22,8 @@ TEST(TextExport, UnnamedLeavesGetTypeNamesAndBadNamesAreReplaced) {
 }
 
 TEST(TextExport, DefinitionsFollowTheExpressionOnePerLine) {
-  const CsgTree t = CsgTree::complement(
-      CsgTree::leaf(Cone{Vec3(0, 0, 1), Vec3::UnitZ(), 2.0, 0.0, 3.0}, "tip"));
+  const CsgTree t =
+      CsgTree::complement(CsgTree::leaf(Cone{Vec3(0, 0, 1), Vec3::UnitZ(), 2.0, 0.0, 3.0}, "tip"));
   std::ostringstream s;
   writeTreeText(s, t);
   EXPECT_EQ(s.str(),

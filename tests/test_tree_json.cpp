@@ -1,12 +1,8 @@
 // Tests for io/tree_json.h: lossless round trips, hand-written documents and
 // clear errors for malformed input.
 
-#include "io/tree_json.h"
-
-#include "io/errors.h"
-#include "test_helpers.h"
-
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cstdint>
@@ -16,8 +12,11 @@
 #include <numbers>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
+
+#include "io/errors.h"
+#include "io/tree_json.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {

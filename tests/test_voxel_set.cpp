@@ -1,9 +1,9 @@
-#include "voxel/voxel_set.h"
-
 #include <gtest/gtest.h>
 
 #include <random>
 #include <set>
+
+#include "voxel/voxel_set.h"
 
 namespace csgvox {
 namespace {

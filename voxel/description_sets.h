@@ -3,20 +3,20 @@
 /// V = voxels whose centre lies in the solid, V+ = V ∩ inside,
 /// V− = V ∩ outside, and μ = whether the solid reaches the grid's border.
 
-#include "core/csg_tree.h"
-#include "voxel/labeling.h"
-
 #include <span>
 #include <vector>
+
+#include "core/csg_tree.h"
+#include "voxel/labeling.h"
 
 namespace csgvox {
 
 /// The description of one candidate solid.
 struct DescriptionSet {
-  VoxelSet voxels;          ///< V: voxels whose centre is in the solid (f >= 0)
-  std::size_t plus = 0;     ///< |V+| = |V ∩ inside|
-  std::size_t minus = 0;    ///< |V−| = |V ∩ outside|
-  bool exceedsGrid = false; ///< μ: the solid reaches the outermost layer of voxels
+  VoxelSet voxels;           ///< V: voxels whose centre is in the solid (f >= 0)
+  std::size_t plus = 0;      ///< |V+| = |V ∩ inside|
+  std::size_t minus = 0;     ///< |V−| = |V ∩ outside|
+  bool exceedsGrid = false;  ///< μ: the solid reaches the outermost layer of voxels
 };
 
 /// Computes the description of `solid`. Only voxels inside the solid's

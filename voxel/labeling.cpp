@@ -1,7 +1,5 @@
 #include "voxel/labeling.h"
 
-#include "core/nearest_neighbors.h"
-
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -12,6 +10,8 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+
+#include "core/nearest_neighbors.h"
 
 namespace csgvox {
 namespace {
@@ -32,7 +32,9 @@ std::size_t voxelOf(const VoxelGrid& grid, const Vec3& p) {
 class NormalVote {
  public:
   NormalVote(const PointCloud& scan, const LabelOptions& o)
-      : scan_(scan), index_(scan.points), k_(std::size_t(std::max(1, o.neighbors))),
+      : scan_(scan),
+        index_(scan.points),
+        k_(std::size_t(std::max(1, o.neighbors))),
         epsilon_(o.epsilon) {}
 
   bool inside(const Vec3& c, std::vector<std::uint32_t>& near) const {
@@ -169,7 +171,8 @@ std::vector<double> pointAreas(const PointCloud& scan, int k) {
 class WindingNumber {
  public:
   WindingNumber(const PointCloud& scan, const LabelOptions& o)
-      : tree_(scan, pointAreas(scan, o.areaNeighbors)), ratio_(o.farFieldRatio),
+      : tree_(scan, pointAreas(scan, o.areaNeighbors)),
+        ratio_(o.farFieldRatio),
         threshold_(o.windingThreshold) {}
 
   bool inside(const Vec3& q, std::vector<std::uint32_t>& /*scratch*/) const {
@@ -207,46 +210,45 @@ std::vector<std::size_t> thinWallVoxels(const VoxelGrid& grid, const PointCloud&
   starts.push_back(byVoxel.size());
   const double h = grid.voxelSize();
   std::vector<char> keep(starts.size() - 1, 0);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, keep.size(), 64),
-      [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<std::uint32_t> scratch;
-        std::vector<char> done;
-        for (std::size_t g = r.begin(); g != r.end(); ++g) {
-          const std::size_t b = starts[g], e = starts[g + 1], v = byVoxel[b].first;
-          done.assign(e - b, 0);
-          for (std::size_t a = b; a < e && !keep[g]; ++a) {
-            if (done[a - b]) continue;
-            // The points facing like point a: one side of a wall.
-            const Vec3& n0 = scan.normals[byVoxel[a].second];
-            Vec3 p = Vec3::Zero(), n = Vec3::Zero();
-            int count = 0;
-            for (std::size_t c = a; c < e; ++c) {
-              const std::uint32_t i = byVoxel[c].second;
-              if (done[c - b] || scan.normals[i].dot(n0) < 0.5) continue;
-              done[c - b] = 1;
-              p += scan.points[i];
-              n += scan.normals[i];
-              ++count;
-            }
-            p /= double(count);
-            if (n.norm() == 0.0) continue;
-            n.normalize();
-            bool caught = false;
-            for (double s : {0.5, 1.0, 1.5, 2.0, 2.5}) {
-              const std::size_t w = voxelOf(grid, p - s * h * n);
-              caught = caught || (w != kNoVoxel && w != v && in[w]);
-            }
-            if (caught) continue;
-            for (double s : {0.25, 0.5}) {
-              if (rule.inside(p - s * h * n, scratch)) {
-                keep[g] = 1;
-                break;
-              }
-            }
-          }
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keep.size(), 64),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<std::uint32_t> scratch;
+                      std::vector<char> done;
+                      for (std::size_t g = r.begin(); g != r.end(); ++g) {
+                        const std::size_t b = starts[g], e = starts[g + 1], v = byVoxel[b].first;
+                        done.assign(e - b, 0);
+                        for (std::size_t a = b; a < e && !keep[g]; ++a) {
+                          if (done[a - b]) continue;
+                          // The points facing like point a: one side of a wall.
+                          const Vec3& n0 = scan.normals[byVoxel[a].second];
+                          Vec3 p = Vec3::Zero(), n = Vec3::Zero();
+                          int count = 0;
+                          for (std::size_t c = a; c < e; ++c) {
+                            const std::uint32_t i = byVoxel[c].second;
+                            if (done[c - b] || scan.normals[i].dot(n0) < 0.5) continue;
+                            done[c - b] = 1;
+                            p += scan.points[i];
+                            n += scan.normals[i];
+                            ++count;
+                          }
+                          p /= double(count);
+                          if (n.norm() == 0.0) continue;
+                          n.normalize();
+                          bool caught = false;
+                          for (double s : {0.5, 1.0, 1.5, 2.0, 2.5}) {
+                            const std::size_t w = voxelOf(grid, p - s * h * n);
+                            caught = caught || (w != kNoVoxel && w != v && in[w]);
+                          }
+                          if (caught) continue;
+                          for (double s : {0.25, 0.5}) {
+                            if (rule.inside(p - s * h * n, scratch)) {
+                              keep[g] = 1;
+                              break;
+                            }
+                          }
+                        }
+                      }
+                    });
   std::vector<std::size_t> kept;
   for (std::size_t g = 0; g < keep.size(); ++g) {
     if (keep[g]) kept.push_back(byVoxel[starts[g]].first);

@@ -1,11 +1,11 @@
 #pragma once
 /// Inside/outside labels of the voxels of a grid, from an oriented scan.
 
+#include <string_view>
+
 #include "core/point_cloud.h"
 #include "voxel/voxel_grid.h"
 #include "voxel/voxel_set.h"
-
-#include <string_view>
 
 namespace csgvox {
 
@@ -50,13 +50,16 @@ enum class BoundaryRule {
 /// Options of labelVoxels.
 struct LabelOptions {
   LabelMethod method = LabelMethod::WindingNumber;  ///< labelling rule
-  int neighbors = 50;              ///< NormalVote: K nearest points per voxel centre
-  double epsilon = 0.8;            ///< NormalVote: outside when the facing fraction exceeds this
-  double windingThreshold = 0.5;   ///< WindingNumber: inside when the winding number exceeds this
-  double farFieldRatio = 2.0;      ///< WindingNumber: a cluster is approximated when farther than this many of its radii
-  int areaNeighbors = 10;          ///< WindingNumber: neighbours used to estimate each point's area
-  BoundaryRule boundary = BoundaryRule::Centre;  ///< labelling of voxels that hold points (Inside: Wu's rule as written)
-  bool keepThinWalls = true;       ///< Centre: keep inside the occupied voxels of walls no voxel centre falls in
+  int neighbors = 50;             ///< NormalVote: K nearest points per voxel centre
+  double epsilon = 0.8;           ///< NormalVote: outside when the facing fraction exceeds this
+  double windingThreshold = 0.5;  ///< WindingNumber: inside when the winding number exceeds this
+  double farFieldRatio =
+      2.0;  ///< WindingNumber: a cluster is approximated when farther than this many of its radii
+  int areaNeighbors = 10;  ///< WindingNumber: neighbours used to estimate each point's area
+  BoundaryRule boundary = BoundaryRule::Centre;  ///< labelling of voxels that hold points (Inside:
+                                                 ///< Wu's rule as written)
+  bool keepThinWalls =
+      true;  ///< Centre: keep inside the occupied voxels of walls no voxel centre falls in
 };
 
 /// Labels of every voxel of a grid.

@@ -2,11 +2,11 @@
 /// A regular voxel grid in an oriented frame (usually the scan's minimal
 /// oriented bounding box), with `resolution` voxels along its longest side.
 
-#include "core/oriented_box.h"
-
 #include <array>
 #include <cstddef>
 #include <span>
+
+#include "core/oriented_box.h"
 
 namespace csgvox {
 
