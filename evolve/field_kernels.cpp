@@ -1,0 +1,332 @@
+#include "evolve/field_kernels.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <stdexcept>
+
+namespace csgvox::fitness_detail {
+namespace {
+
+constexpr std::size_t kChunk = 256;  // points per batch: the value stack stays in L1
+
+void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>& code) {
+  switch (node.kind) {
+    case NodeKind::Primitive: {
+      const auto index = library.indexOf(node);
+      if (!index) {
+        throw std::invalid_argument("leaf '" + node.name +
+                                    "' is not one of the search's primitives");
+      }
+      code.push_back({Op::Leaf, std::uint16_t(*index)});
+      return;
+    }
+    case NodeKind::Complement:
+      emit(*node.children.front(), library, code);
+      if (code.back().op == Op::Leaf) {
+        code.back().op = Op::LeafNeg;
+      } else if (code.back().op == Op::LeafNeg) {
+        code.back().op = Op::Leaf;
+      } else {
+        code.push_back({Op::Negate, 0});
+      }
+      return;
+    case NodeKind::Union:
+    case NodeKind::Intersection:
+    case NodeKind::Difference: {
+      const Op op = node.kind == NodeKind::Union ? Op::Max : Op::Min;
+      emit(*node.children.front(), library, code);
+      for (std::size_t k = 1; k < node.children.size(); ++k) {
+        emit(*node.children[k], library, code);
+        if (node.kind == NodeKind::Difference) {
+          if (code.back().op == Op::Leaf) {
+            code.back().op = Op::LeafNeg;
+          } else if (code.back().op == Op::LeafNeg) {
+            code.back().op = Op::Leaf;
+          } else {
+            code.push_back({Op::Negate, 0});
+          }
+        }
+        code.push_back({op, 0});
+      }
+      return;
+    }
+  }
+}
+
+// ---- min/max: the field at a point is one leaf's ±field; carry its id ----
+
+struct MinMaxStack {
+  std::vector<float> values;
+  std::vector<std::int32_t> ids;  // 2·leaf + (1 when negated)
+};
+
+template <bool kMin>
+void select(float* __restrict va, std::int32_t* __restrict ia, const float* __restrict vb,
+            const std::int32_t* __restrict ib, std::size_t m) {
+  for (std::size_t i = 0; i < m; ++i) {
+    const bool takeB = kMin ? vb[i] < va[i] : vb[i] > va[i];
+    va[i] = takeB ? vb[i] : va[i];
+    ia[i] = takeB ? ib[i] : ia[i];
+  }
+}
+
+TermSums minMaxTerms(const Program& program, const PointTables& t) {
+  thread_local MinMaxStack stack;
+  const std::size_t need = program.stackDepth * kChunk;
+  if (stack.values.size() < need) {
+    stack.values.resize(need);
+    stack.ids.resize(need);
+  }
+  TermSums sums;
+  for (std::size_t start = 0; start < t.n; start += kChunk) {
+    const std::size_t m = std::min(kChunk, t.n - start);
+    std::size_t top = 0;  // values on the stack
+    for (const Instr& ins : program.code) {
+      float* v = stack.values.data() + top * kChunk;
+      std::int32_t* id = stack.ids.data() + top * kChunk;
+      switch (ins.op) {
+        case Op::Leaf:
+        case Op::LeafNeg: {
+          const float* src = t.values + std::size_t(ins.leaf) * t.n + start;
+          const bool neg = ins.op == Op::LeafNeg;
+          const std::int32_t code = 2 * std::int32_t(ins.leaf) + (neg ? 1 : 0);
+          if (neg) {
+            for (std::size_t i = 0; i < m; ++i) v[i] = -src[i];
+          } else {
+            std::copy(src, src + m, v);
+          }
+          std::fill(id, id + m, code);
+          ++top;
+          break;
+        }
+        case Op::Negate:
+          v -= kChunk;
+          id -= kChunk;
+          for (std::size_t i = 0; i < m; ++i) {
+            v[i] = -v[i];
+            id[i] ^= 1;
+          }
+          break;
+        case Op::Min:
+        case Op::Max: {
+          float* a = v - 2 * kChunk;
+          std::int32_t* ia = id - 2 * kChunk;
+          if (ins.op == Op::Min) {
+            select<true>(a, ia, v - kChunk, id - kChunk, m);
+          } else {
+            select<false>(a, ia, v - kChunk, id - kChunk, m);
+          }
+          --top;
+          break;
+        }
+      }
+    }
+    const std::int32_t* id = stack.ids.data();
+    double distance = 0.0, normal = 0.0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::size_t leaf = std::size_t(id[i]) >> 1;
+      distance += t.distanceTerm[leaf * t.n + start + i];
+      normal += t.normalTerm[std::size_t(id[i]) * t.n + start + i];
+    }
+    sums.distance += distance;
+    sums.normal += normal;
+  }
+  return sums;
+}
+
+// ---- smooth operations: values and gradients blend near the bisector ----
+
+struct Partials {
+  double f, d1, d2;
+};
+
+struct RFunctionPartials {
+  static Partials unite(double a, double b) { return blend(a, b, 1.0); }
+  static Partials intersect(double a, double b) { return blend(a, b, -1.0); }
+  static Partials blend(double a, double b, double sign) {
+    const double h = std::hypot(a, b);
+    if (h == 0.0) return {0.0, 0.5, 0.5};
+    return {a + b + sign * h, 1.0 + sign * a / h, 1.0 + sign * b / h};
+  }
+};
+
+struct SmoothStack {
+  std::vector<float> f, gx, gy, gz;
+  std::vector<std::int32_t> ids;  // as min/max; −1 where the operands blend
+};
+
+template <class Ops>
+void combineSmooth(SmoothStack& s, std::size_t a, std::size_t b, std::size_t m, bool intersect,
+                   const Ops& ops) {
+  for (std::size_t i = 0; i < m; ++i) {
+    const double fa = s.f[a + i], fb = s.f[b + i];
+    const Partials r = intersect ? ops.intersect(fa, fb) : ops.unite(fa, fb);
+    if (r.d1 == 1.0 && r.d2 == 0.0) {
+      s.f[a + i] = float(r.f);  // a alone: keep its gradient and id
+    } else if (r.d1 == 0.0 && r.d2 == 1.0) {
+      s.f[a + i] = float(r.f);
+      s.gx[a + i] = s.gx[b + i];
+      s.gy[a + i] = s.gy[b + i];
+      s.gz[a + i] = s.gz[b + i];
+      s.ids[a + i] = s.ids[b + i];
+    } else {
+      s.f[a + i] = float(r.f);
+      s.gx[a + i] = float(r.d1 * s.gx[a + i] + r.d2 * s.gx[b + i]);
+      s.gy[a + i] = float(r.d1 * s.gy[a + i] + r.d2 * s.gy[b + i]);
+      s.gz[a + i] = float(r.d1 * s.gz[a + i] + r.d2 * s.gz[b + i]);
+      s.ids[a + i] = -1;
+    }
+  }
+}
+
+template <class Ops>
+TermSums smoothTerms(const Program& program, const PointTables& t, const Ops& ops) {
+  thread_local SmoothStack s;
+  const std::size_t need = program.stackDepth * kChunk;
+  if (s.f.size() < need) {
+    s.f.resize(need);
+    s.gx.resize(need);
+    s.gy.resize(need);
+    s.gz.resize(need);
+    s.ids.resize(need);
+  }
+  TermSums sums;
+  for (std::size_t start = 0; start < t.n; start += kChunk) {
+    const std::size_t m = std::min(kChunk, t.n - start);
+    std::size_t top = 0;
+    for (const Instr& ins : program.code) {
+      const std::size_t at = top * kChunk;
+      switch (ins.op) {
+        case Op::Leaf:
+        case Op::LeafNeg: {
+          const std::size_t from = std::size_t(ins.leaf) * t.n + start;
+          const float sign = ins.op == Op::LeafNeg ? -1.0f : 1.0f;
+          const std::int32_t code = 2 * std::int32_t(ins.leaf) + (ins.op == Op::LeafNeg ? 1 : 0);
+          for (std::size_t i = 0; i < m; ++i) {
+            s.f[at + i] = sign * t.values[from + i];
+            s.gx[at + i] = sign * t.gradX[from + i];
+            s.gy[at + i] = sign * t.gradY[from + i];
+            s.gz[at + i] = sign * t.gradZ[from + i];
+            s.ids[at + i] = code;
+          }
+          ++top;
+          break;
+        }
+        case Op::Negate: {
+          const std::size_t last = at - kChunk;
+          for (std::size_t i = 0; i < m; ++i) {
+            s.f[last + i] = -s.f[last + i];
+            s.gx[last + i] = -s.gx[last + i];
+            s.gy[last + i] = -s.gy[last + i];
+            s.gz[last + i] = -s.gz[last + i];
+            if (s.ids[last + i] >= 0) s.ids[last + i] ^= 1;
+          }
+          break;
+        }
+        case Op::Min:
+        case Op::Max:
+          combineSmooth(s, at - 2 * kChunk, at - kChunk, m, ins.op == Op::Min, ops);
+          --top;
+          break;
+      }
+    }
+    double distance = 0.0, normal = 0.0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::int32_t id = s.ids[i];
+      if (id >= 0) {
+        distance += t.distanceTerm[(std::size_t(id) >> 1) * t.n + start + i];
+        normal += t.normalTerm[std::size_t(id) * t.n + start + i];
+        continue;
+      }
+      const double r = s.f[i] / t.epsilon;
+      distance += std::exp(-r * r);
+      const double gx = s.gx[i], gy = s.gy[i], gz = s.gz[i];
+      const double gn = std::sqrt(gx * gx + gy * gy + gz * gz);
+      const std::size_t p = start + i;
+      const double c = gn > 0.0 ? -(gx * t.normX[p] + gy * t.normY[p] + gz * t.normZ[p]) / gn : 0.0;
+      const double theta = std::acos(std::clamp(c, -1.0, 1.0)) / t.alpha;
+      normal += std::exp(-theta * theta);
+    }
+    sums.distance += distance;
+    sums.normal += normal;
+  }
+  return sums;
+}
+
+}  // namespace
+
+Program compile(const CsgTree& tree, const PrimitiveLibrary& library) {
+  if (tree.empty()) throw std::invalid_argument("the fitness of an empty tree is undefined");
+  Program program;
+  emit(*tree.root(), library, program.code);
+  std::size_t depth = 0;
+  for (const Instr& ins : program.code) {
+    if (ins.op == Op::Leaf || ins.op == Op::LeafNeg) {
+      program.stackDepth = std::max(program.stackDepth, ++depth);
+    } else if (ins.op != Op::Negate) {
+      --depth;
+    }
+  }
+  return program;
+}
+
+TermSums pointTerms(const Program& program, const PointTables& tables, SetOperationKind ops) {
+  switch (ops) {
+    case SetOperationKind::MinMax:
+      return minMaxTerms(program, tables);
+    case SetOperationKind::RFunction:
+      return smoothTerms(program, tables, RFunctionPartials{});
+  }
+  throw std::invalid_argument("unknown set operations");
+}
+
+std::size_t voxelMismatch(const Program& program, const std::uint64_t* insideSets,
+                          const std::uint64_t* labels, std::size_t words,
+                          std::uint64_t lastWordMask) {
+  thread_local std::vector<std::uint64_t> stack;
+  if (stack.size() < program.stackDepth * words) stack.resize(program.stackDepth * words);
+  std::size_t top = 0;
+  for (const Instr& ins : program.code) {
+    std::uint64_t* w = stack.data() + top * words;
+    switch (ins.op) {
+      case Op::Leaf: {
+        const std::uint64_t* src = insideSets + std::size_t(ins.leaf) * words;
+        std::copy(src, src + words, w);
+        ++top;
+        break;
+      }
+      case Op::LeafNeg: {
+        const std::uint64_t* src = insideSets + std::size_t(ins.leaf) * words;
+        for (std::size_t i = 0; i < words; ++i) w[i] = ~src[i];
+        ++top;
+        break;
+      }
+      case Op::Negate:
+        w -= words;
+        for (std::size_t i = 0; i < words; ++i) w[i] = ~w[i];
+        break;
+      case Op::Min:
+      case Op::Max: {
+        std::uint64_t* a = w - 2 * words;
+        const std::uint64_t* b = w - words;
+        if (ins.op == Op::Min) {
+          for (std::size_t i = 0; i < words; ++i) a[i] &= b[i];
+        } else {
+          for (std::size_t i = 0; i < words; ++i) a[i] |= b[i];
+        }
+        --top;
+        break;
+      }
+    }
+  }
+  std::size_t count = 0;
+  for (std::size_t i = 0; i + 1 < words; ++i)
+    count += std::size_t(std::popcount(stack[i] ^ labels[i]));
+  if (words > 0) {
+    count += std::size_t(std::popcount((stack[words - 1] ^ labels[words - 1]) & lastWordMask));
+  }
+  return count;
+}
+
+}  // namespace csgvox::fitness_detail

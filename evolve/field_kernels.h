@@ -1,0 +1,65 @@
+#pragma once
+/// The inner loops of the fitness (evolve/fitness.h): a tree compiled to a
+/// postfix program over the library's primitives, run over chunks of points
+/// against the cached per-primitive arrays, and over the voxel bitsets.
+/// Internal to the evolve module.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/csg_tree.h"
+#include "core/set_operations.h"
+#include "evolve/primitive_library.h"
+
+namespace csgvox::fitness_detail {
+
+/// Postfix instructions. Leaf pushes a primitive's field, LeafNeg its
+/// negation; Negate negates the top; Min and Max pop two and push one.
+enum class Op : std::uint8_t { Leaf, LeafNeg, Negate, Min, Max };
+
+struct Instr {
+  Op op = Op::Leaf;
+  std::uint16_t leaf = 0;  ///< Leaf, LeafNeg: index into the library
+};
+
+/// A compiled tree.
+struct Program {
+  std::vector<Instr> code;
+  std::size_t stackDepth = 1;  ///< most values held at once
+};
+
+/// Compiles a tree over `library` (union = max, intersection = min,
+/// difference = min with negated operands, complement = negation).
+/// @throw std::invalid_argument for an empty tree or a leaf not in the library.
+Program compile(const CsgTree& tree, const PrimitiveLibrary& library);
+
+/// The cached arrays a program runs over ([primitive][point] layouts).
+struct PointTables {
+  std::size_t n = 0;
+  const float* values = nullptr;
+  const float *gradX = nullptr, *gradY = nullptr, *gradZ = nullptr;  ///< smooth operations
+  const float *normX = nullptr, *normY = nullptr, *normZ = nullptr;  ///< smooth operations
+  const float* distanceTerm = nullptr;                               ///< [p][n]
+  const float* normalTerm = nullptr;                                 ///< [2p][n]
+  double epsilon = 0.0;                                              ///< εd, scan units
+  double alpha = 0.0;                                                ///< α, radians
+  double radius = 0.0;                                               ///< SARDF radius, scan units
+};
+
+/// Σ exp(−di²) and Σ exp(−θi²) over the points.
+struct TermSums {
+  double distance = 0.0;
+  double normal = 0.0;
+};
+
+/// The point terms of a program with the given set operations.
+TermSums pointTerms(const Program& program, const PointTables& tables, SetOperationKind ops);
+
+/// |T △ L|: voxels where the program's solid (from the primitives' inside
+/// sets, [p][words]) and the labels disagree.
+std::size_t voxelMismatch(const Program& program, const std::uint64_t* insideSets,
+                          const std::uint64_t* labels, std::size_t words,
+                          std::uint64_t lastWordMask);
+
+}  // namespace csgvox::fitness_detail

@@ -1,0 +1,209 @@
+#include "evolve/fitness.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+
+#include "evolve/field_kernels.h"
+
+namespace csgvox {
+
+using fitness_detail::Instr;
+using fitness_detail::Op;
+using fitness_detail::Program;
+
+struct FitnessModel::Data {
+  PrimitiveLibrary library;
+  FitnessOptions options;
+  std::size_t n = 0;                       // points
+  std::size_t p = 0;                       // primitives
+  double epsilon = 0.0;                    // εd, scan units
+  double alpha = 0.0;                      // α, radians
+  double lambda = 0.0;                     // λ per node
+  double radius = 0.0;                     // SARDF radius, scan units
+  std::vector<float> values;               // [p][n] field of each primitive
+  std::vector<float> gradX, gradY, gradZ;  // [p][n], smooth operations only
+  std::vector<float> normX, normY, normZ;  // [n] scan normals, smooth operations only
+  std::vector<float> distanceTerm;         // [p][n] exp(−(f/εd)²)
+  std::vector<float> normalTerm;           // [2p][n] exp(−(θ/α)²) for +f and −f
+  // Voxel term.
+  std::size_t words = 0;                  // words per voxel set
+  std::uint64_t lastWordMask = ~0ull;     // valid bits of the last word
+  std::vector<std::uint64_t> insideSets;  // [p][words]
+  std::vector<std::uint64_t> labels;      // [words]
+  std::size_t labelCount = 0;
+};
+
+namespace {
+
+float normalTermOf(double cosAngle, double alpha) {
+  const double theta = std::acos(std::clamp(cosAngle, -1.0, 1.0)) / alpha;
+  return float(std::exp(-theta * theta));
+}
+
+// Inside set of one primitive over the grid's voxel centres.
+void insideSet(const Primitive& primitive, const VoxelGrid& grid, std::uint64_t* words) {
+  const auto& d = grid.dims();
+  std::vector<Vec3> row(static_cast<std::size_t>(d[0]));
+  std::vector<double> f(row.size());
+  for (int k = 0; k < d[2]; ++k) {
+    for (int j = 0; j < d[1]; ++j) {
+      for (int i = 0; i < d[0]; ++i) row[std::size_t(i)] = grid.center(i, j, k);
+      primitive.values(row, f);
+      const std::size_t base = grid.index(0, j, k);
+      for (std::size_t i = 0; i < row.size(); ++i) {
+        if (f[i] >= 0.0) words[(base + i) >> 6] |= std::uint64_t(1) << ((base + i) & 63);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+FitnessModel::FitnessModel(std::span<const Vec3> points, std::span<const Vec3> normals,
+                           double diagonal, const PrimitiveLibrary& library,
+                           const FitnessOptions& options, const VoxelTarget* target) {
+  if (points.size() != normals.size()) {
+    throw std::invalid_argument("FitnessModel: " + std::to_string(points.size()) + " points but " +
+                                std::to_string(normals.size()) + " normals");
+  }
+  if (points.empty()) throw std::invalid_argument("FitnessModel: no points");
+  if (!(diagonal > 0.0) || !std::isfinite(diagonal)) {
+    throw std::invalid_argument("FitnessModel: the diagonal must be > 0");
+  }
+  if (!(options.distanceTolerance > 0.0) || !(options.angleTolerance > 0.0)) {
+    throw std::invalid_argument("FitnessModel: the tolerances must be > 0");
+  }
+  if (options.voxelWeight > 0.0 && target == nullptr) {
+    throw std::invalid_argument("FitnessModel: the voxel term needs voxel labels");
+  }
+  auto data = std::make_unique<Data>();
+  Data& d = *data;
+  d.library = library;
+  d.options = options;
+  d.n = points.size();
+  d.p = library.size();
+  d.epsilon = options.distanceTolerance * diagonal;
+  d.alpha = options.angleTolerance * std::numbers::pi / 180.0;
+  d.lambda = options.sizeWeight >= 0.0 ? options.sizeWeight : std::log(double(d.n));
+  d.radius = options.sardfRadius * diagonal;
+  const bool smooth = options.operations != SetOperationKind::MinMax;
+  const std::size_t n = d.n;
+  d.values.resize(d.p * n);
+  d.distanceTerm.resize(d.p * n);
+  d.normalTerm.resize(2 * d.p * n);
+  if (smooth) {
+    d.gradX.resize(d.p * n);
+    d.gradY.resize(d.p * n);
+    d.gradZ.resize(d.p * n);
+    d.normX.resize(n);
+    d.normY.resize(n);
+    d.normZ.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      d.normX[i] = float(normals[i].x());
+      d.normY[i] = float(normals[i].y());
+      d.normZ[i] = float(normals[i].z());
+    }
+  }
+  tbb::parallel_for(std::size_t(0), d.p, [&](std::size_t q) {
+    const Primitive& primitive = library.primitive(q);
+    for (std::size_t i = 0; i < n; ++i) {
+      Vec3 g;
+      const double f = primitive.valueAndGradient(points[i], g);
+      const double r = f / d.epsilon;
+      d.values[q * n + i] = float(f);
+      d.distanceTerm[q * n + i] = float(std::exp(-r * r));
+      const double gn = g.norm();
+      // ∇f points inwards, the scan normal outwards: the angle between ∇f
+      // and −n; for −f, between −∇f and −n.
+      const double c = gn > 0.0 ? -g.dot(normals[i]) / gn : 0.0;
+      d.normalTerm[2 * q * n + i] = normalTermOf(c, d.alpha);
+      d.normalTerm[(2 * q + 1) * n + i] = normalTermOf(-c, d.alpha);
+      if (smooth) {
+        d.gradX[q * n + i] = float(g.x());
+        d.gradY[q * n + i] = float(g.y());
+        d.gradZ[q * n + i] = float(g.z());
+      }
+    }
+  });
+  if (options.voxelWeight > 0.0) {
+    const std::size_t voxels = target->grid.voxelCount();
+    if (target->inside.size() != voxels) {
+      throw std::invalid_argument("FitnessModel: the voxel labels do not match their grid");
+    }
+    d.words = (voxels + 63) / 64;
+    d.lastWordMask = voxels % 64 == 0 ? ~0ull : (std::uint64_t(1) << (voxels % 64)) - 1;
+    d.labels.assign(target->inside.words().begin(), target->inside.words().end());
+    d.labelCount = target->inside.count();
+    d.insideSets.assign(d.p * d.words, 0);
+    tbb::parallel_for(std::size_t(0), d.p, [&](std::size_t q) {
+      insideSet(library.primitive(q), target->grid, d.insideSets.data() + q * d.words);
+    });
+  }
+  data_ = std::move(data);
+}
+
+FitnessModel::~FitnessModel() = default;
+FitnessModel::FitnessModel(FitnessModel&&) noexcept = default;
+FitnessModel& FitnessModel::operator=(FitnessModel&&) noexcept = default;
+
+std::size_t FitnessModel::pointCount() const { return data_->n; }
+const PrimitiveLibrary& FitnessModel::library() const { return data_->library; }
+const FitnessOptions& FitnessModel::options() const { return data_->options; }
+double FitnessModel::sizeWeight() const { return data_->lambda; }
+
+Fitness FitnessModel::evaluate(const CsgTree& tree) const {
+  const Data& d = *data_;
+  const Program program = fitness_detail::compile(tree, d.library);
+  Fitness out;
+  out.nodes = tree.nodeCount();
+  fitness_detail::PointTables tables{d.n,
+                                     d.values.data(),
+                                     d.gradX.data(),
+                                     d.gradY.data(),
+                                     d.gradZ.data(),
+                                     d.normX.data(),
+                                     d.normY.data(),
+                                     d.normZ.data(),
+                                     d.distanceTerm.data(),
+                                     d.normalTerm.data(),
+                                     d.epsilon,
+                                     d.alpha,
+                                     d.radius};
+  const fitness_detail::TermSums sums =
+      fitness_detail::pointTerms(program, tables, d.options.operations);
+  out.distanceTerm = sums.distance;
+  out.normalTerm = sums.normal;
+  out.sizePenalty = d.lambda * double(out.nodes);
+  if (d.options.voxelWeight > 0.0) {
+    out.voxelMismatch = fitness_detail::voxelMismatch(program, d.insideSets.data(), d.labels.data(),
+                                                      d.words, d.lastWordMask);
+    out.voxelPenalty = d.options.voxelWeight * double(d.n) * double(out.voxelMismatch) /
+                       double(std::max<std::size_t>(d.labelCount, 1));
+  }
+  out.total = out.distanceTerm + out.normalTerm - out.sizePenalty - out.voxelPenalty;
+  return out;
+}
+
+std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::uint64_t seed) {
+  std::vector<std::uint32_t> all(n);
+  for (std::size_t i = 0; i < n; ++i) all[i] = std::uint32_t(i);
+  if (count >= n) return all;
+  std::mt19937_64 rng(seed);
+  // Fisher–Yates with our own index draw: the same on every standard library.
+  for (std::size_t i = n - 1; i > 0; --i) {
+    const std::size_t j = std::size_t(rng() % (i + 1));
+    std::swap(all[i], all[j]);
+  }
+  all.resize(count);
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+}  // namespace csgvox

@@ -1,0 +1,161 @@
+// The point fitness (evolve/fitness.h): Eq. 7 and the voxel term against a
+// direct per-point computation with CsgTree::evaluate.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "evolve/fitness.h"
+#include "evolve/tree_variation.h"
+#include "evolve_fixtures.h"
+#include "test_helpers.h"
+
+namespace csgvox {
+namespace {
+
+// Eq. 7's point terms computed point by point from the tree's own field.
+std::pair<double, double> directTerms(const CsgTree& tree, const test::OrientedPoints& in,
+                                      double epsilon, double alphaRadians,
+                                      const SetOperations& ops) {
+  double distance = 0.0, normal = 0.0;
+  for (std::size_t i = 0; i < in.points.size(); ++i) {
+    const FieldValue v = tree.evaluate(in.points[i], ops);
+    const double r = v.f / epsilon;
+    distance += std::exp(-r * r);
+    const double gn = v.gradient.norm();
+    const double c = gn > 0 ? -v.gradient.dot(in.normals[i]) / gn : 0.0;
+    const double theta = std::acos(std::clamp(c, -1.0, 1.0)) / alphaRadians;
+    normal += std::exp(-theta * theta);
+  }
+  return {distance, normal};
+}
+
+// Points near the cube's faces, pushed off by up to 3 % of its size, with
+// normals tilted: every term is strictly between 0 and 1.
+test::OrientedPoints noisyCube(std::uint64_t seed) {
+  test::OrientedPoints in = test::cubeFacePoints(12);
+  test::Rng rng(seed);
+  std::uniform_real_distribution<double> u(-0.03, 0.03);
+  for (std::size_t i = 0; i < in.points.size(); ++i) {
+    in.points[i] += Vec3(u(rng), u(rng), u(rng));
+    in.normals[i] = (in.normals[i] + 3.0 * Vec3(u(rng), u(rng), u(rng))).normalized();
+  }
+  return in;
+}
+
+constexpr double kDiagonal = 2.0 * 1.7320508075688772;
+
+TEST(Fitness, ExactCubeScoresEveryPoint) {
+  const test::OrientedPoints in = test::cubeFacePoints(20);
+  const PrimitiveLibrary library = test::cubePlanes();
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  const Fitness f = model.evaluate(test::cubeTree(library));
+  const double n = double(in.points.size());
+  EXPECT_NEAR(f.distanceTerm, n, 1e-9 * n);
+  EXPECT_NEAR(f.normalTerm, n, 1e-3 * n);  // normals exact; float tables
+  EXPECT_EQ(f.nodes, 7u);
+  EXPECT_DOUBLE_EQ(model.sizeWeight(), std::log(n));
+  EXPECT_NEAR(f.total, f.distanceTerm + f.normalTerm - 7 * std::log(n), 1e-9);
+  // Five faces explain five sixths of the points (and the sixth face only
+  // within a few εd of its edges).
+  std::vector<CsgTree> five;
+  for (std::size_t i = 0; i < 5; ++i) five.push_back(library.leafTree(i));
+  EXPECT_LT(model.evaluate(CsgTree::intersect(five)).distanceTerm, (5.0 / 6.0 + 0.01) * n);
+}
+
+TEST(Fitness, MinMaxMatchesDirectComputationOnRandomTrees) {
+  const test::OrientedPoints in = noisyCube(3);
+  const PrimitiveLibrary library = test::cubePlanes(
+      {Sphere{Vec3(0.3, 0.1, 0.0), 0.7}, Cylinder{Vec3::Zero(), Vec3::UnitX(), 0.4, 3.0}});
+  FitnessOptions options;
+  options.angleTolerance = 20.0;
+  const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
+  EvolveRng rng(7);
+  for (int t = 0; t < 40; ++t) {
+    CsgTree tree = randomTree(rng, library, 5, 0.8);
+    if (t % 5 == 0) tree = CsgTree::complement(tree);
+    const auto [distance, normal] = directTerms(
+        tree, in, 0.01 * kDiagonal, 20.0 * std::numbers::pi / 180.0, minMaxOperations());
+    const Fitness f = model.evaluate(tree);
+    // Tables are floats: terms agree to float rounding.
+    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
+    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
+  }
+}
+
+TEST(Fitness, RFunctionsMatchDirectComputation) {
+  const test::OrientedPoints in = noisyCube(5);
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(0.5, 0.5, 0.5), 0.8}});
+  FitnessOptions options;
+  options.operations = SetOperationKind::RFunction;
+  options.distanceTolerance = 0.05;
+  const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
+  EvolveRng rng(11);
+  for (int t = 0; t < 20; ++t) {
+    const CsgTree tree = randomTree(rng, library, 4, 0.9);
+    const auto [distance, normal] = directTerms(
+        tree, in, 0.05 * kDiagonal, 10.0 * std::numbers::pi / 180.0, rFunctionOperations());
+    const Fitness f = model.evaluate(tree);
+    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
+    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
+  }
+}
+
+TEST(Fitness, VoxelTermCountsDisagreeingVoxelCentres) {
+  const test::OrientedPoints in = test::cubeFacePoints(8);
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(1, 1, 1), 1.2}});
+  VoxelTarget target;
+  target.grid = VoxelGrid(Vec3::Constant(-1.5), Mat3::Identity(), 0.1, {30, 30, 31});
+  target.inside = VoxelSet(target.grid.voxelCount());
+  const CsgTree cube = test::cubeTree(library);
+  for (std::size_t v = 0; v < target.grid.voxelCount(); ++v) {
+    if (cube.contains(target.grid.center(v))) target.inside.set(v);
+  }
+  FitnessOptions options;
+  options.voxelWeight = 1.0;
+  const FitnessModel model(in.points, in.normals, kDiagonal, library, options, &target);
+  EXPECT_EQ(model.evaluate(cube).voxelMismatch, 0u);
+  EvolveRng rng(5);
+  for (int t = 0; t < 20; ++t) {
+    CsgTree tree = randomTree(rng, library, 4, 0.8);
+    if (t % 4 == 0) tree = CsgTree::complement(tree);
+    std::size_t mismatch = 0;
+    for (std::size_t v = 0; v < target.grid.voxelCount(); ++v) {
+      mismatch += tree.contains(target.grid.center(v)) != target.inside.test(v);
+    }
+    const Fitness f = model.evaluate(tree);
+    EXPECT_EQ(f.voxelMismatch, mismatch) << t;
+    EXPECT_NEAR(f.voxelPenalty,
+                double(in.points.size()) * double(mismatch) / double(target.inside.count()), 1e-9);
+  }
+}
+
+TEST(Fitness, RefusesForeignLeavesAndBadInput) {
+  const test::OrientedPoints in = test::cubeFacePoints(4);
+  const PrimitiveLibrary library = test::cubePlanes();
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  EXPECT_THROW(model.evaluate(CsgTree::leaf(Sphere{})), std::invalid_argument);
+  EXPECT_THROW(model.evaluate(CsgTree()), std::invalid_argument);
+  // A leaf equal to a library primitive is that primitive.
+  EXPECT_NO_THROW(model.evaluate(CsgTree::leaf(HalfSpace{Vec3::UnitX(), 1.0})));
+  const std::vector<Vec3> none;
+  EXPECT_THROW(FitnessModel(none, none, 1.0, library), std::invalid_argument);
+  EXPECT_THROW(FitnessModel(in.points, none, 1.0, library), std::invalid_argument);
+  FitnessOptions voxels;
+  voxels.voxelWeight = 1.0;
+  EXPECT_THROW(FitnessModel(in.points, in.normals, 1.0, library, voxels), std::invalid_argument);
+}
+
+TEST(Fitness, SpreadSampleIsSortedDistinctAndSeeded) {
+  const auto a = spreadSample(1000, 100, 3), b = spreadSample(1000, 100, 3);
+  EXPECT_EQ(a, b);
+  ASSERT_EQ(a.size(), 100u);
+  EXPECT_TRUE(std::is_sorted(a.begin(), a.end()));
+  EXPECT_EQ(std::adjacent_find(a.begin(), a.end()), a.end());
+  EXPECT_NE(a, spreadSample(1000, 100, 4));
+  EXPECT_EQ(spreadSample(10, 50, 1).size(), 10u);
+}
+
+}  // namespace
+}  // namespace csgvox

@@ -1,0 +1,180 @@
+// The genetic search (evolve/genetic_search.h), its variation operators and
+// redundancy removal, on the box's six face planes.
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "evolve/genetic_search.h"
+#include "evolve/redundancy.h"
+#include "evolve_fixtures.h"
+
+namespace csgvox {
+namespace {
+
+constexpr double kDiagonal = 2.0 * 1.7320508075688772;
+
+bool leavesAreTheLibrarys(const CsgTree& tree, const PrimitiveLibrary& library) {
+  for (const Node* leaf : tree.leaves()) {
+    bool found = false;
+    for (std::size_t i = 0; i < library.size() && !found; ++i)
+      found = library.leaf(i).get() == leaf;
+    if (!found) return false;
+  }
+  return true;
+}
+
+// Same solid as the cube: every sampled point classified alike.
+bool isTheCube(const CsgTree& tree) {
+  for (double x = -1.45; x <= 1.5; x += 0.1) {
+    for (double y = -1.45; y <= 1.5; y += 0.1) {
+      for (double z = -1.45; z <= 1.5; z += 0.1) {
+        const bool inCube = std::abs(x) < 1 && std::abs(y) < 1 && std::abs(z) < 1;
+        if (tree.contains(Vec3(x, y, z)) != inCube) return false;
+      }
+    }
+  }
+  return true;
+}
+
+TEST(GeneticSearch, FindsTheExactCubeFromItsSixPlanes) {
+  const test::OrientedPoints in = test::cubeFacePoints(30);
+  const PrimitiveLibrary library = test::cubePlanes();
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  int found = 0;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    EvolveOptions options;
+    options.seed = seed;
+    options.maxGenerations = 400;
+    options.stallGenerations = 100;
+    const EvolveResult r = evolve(model, {}, options);
+    EXPECT_TRUE(leavesAreTheLibrarys(r.best, library));
+    if (r.best.primitiveCount() == 6 && r.best.nodeCount() == 11 && isTheCube(r.best)) ++found;
+  }
+  EXPECT_GE(found, 4);
+}
+
+TEST(GeneticSearch, SameTreeForASeedWhateverTheThreads) {
+  const test::OrientedPoints in = test::cubeFacePoints(16);
+  const PrimitiveLibrary library =
+      test::cubePlanes({Sphere{Vec3(1, 1, 1), 0.8}, Cylinder{Vec3::Zero(), Vec3::UnitZ(), 0.5, 4}});
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  EvolveOptions options;
+  options.seed = 9;
+  options.maxGenerations = 60;
+  options.stallGenerations = 0;
+  EvolveResult one, two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = evolve(model, {}, options);
+  }
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    two = evolve(model, {}, options);
+  }
+  EXPECT_TRUE(one.best.structurallyEqual(two.best));
+  EXPECT_EQ(one.fitness.total, two.fitness.total);
+  EXPECT_EQ(one.evaluations, two.evaluations);
+  options.seed = 10;
+  const EvolveResult other = evolve(model, {}, options);
+  EXPECT_GT(other.evaluations, 0u);
+}
+
+TEST(GeneticSearch, SeedsAreKeptAndStopRulesHold) {
+  const test::OrientedPoints in = test::cubeFacePoints(10);
+  const PrimitiveLibrary library = test::cubePlanes();
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  // Seeded with the answer (built from equal but separate leaves), the search
+  // keeps it and stalls.
+  std::vector<CsgTree> faces;
+  for (std::size_t i = 0; i < 6; ++i) faces.push_back(CsgTree::leaf(library.primitive(i)));
+  const CsgTree seed = CsgTree::intersect(faces);
+  EvolveOptions options;
+  options.stallGenerations = 5;
+  const EvolveResult r = evolve(model, std::vector<CsgTree>{seed}, options);
+  EXPECT_EQ(r.stop, EvolveStop::Stalled);
+  EXPECT_EQ(r.generations, 5u);
+  EXPECT_TRUE(isTheCube(r.best));
+  EXPECT_LE(r.best.nodeCount(), 7u);
+  // The callback can stop the search; a generation limit stops it.
+  std::size_t calls = 0;
+  options.stallGenerations = 0;
+  const EvolveResult cancelled = evolve(model, {}, options, [&](const GenerationReport& g) {
+    return ++calls < 3 && g.generation < 3;
+  });
+  EXPECT_EQ(cancelled.stop, EvolveStop::Cancelled);
+  EXPECT_EQ(cancelled.generations, 3u);
+  options.maxGenerations = 4;
+  EXPECT_EQ(evolve(model, {}, options).stop, EvolveStop::Generations);
+  // A foreign seed is refused.
+  EXPECT_THROW(evolve(model, std::vector<CsgTree>{CsgTree::leaf(Sphere{})}, options),
+               std::invalid_argument);
+}
+
+TEST(GeneticSearch, RoughPointsThenAllPoints) {
+  const test::OrientedPoints in = test::cubeFacePoints(20);
+  const PrimitiveLibrary library = test::cubePlanes();
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  const std::vector<std::uint32_t> subset = spreadSample(in.points.size(), 300, 1);
+  test::OrientedPoints few;
+  for (const std::uint32_t i : subset) {
+    few.points.push_back(in.points[i]);
+    few.normals.push_back(in.normals[i]);
+  }
+  const FitnessModel rough(few.points, few.normals, kDiagonal, library);
+  EvolveOptions options;
+  options.stallGenerations = 30;
+  bool sawRough = false, sawFull = false;
+  const EvolveResult r = evolve(
+      model, {}, options,
+      [&](const GenerationReport& g) {
+        (g.rough ? sawRough : sawFull) = true;
+        return true;
+      },
+      &rough);
+  EXPECT_TRUE(sawRough);
+  EXPECT_TRUE(sawFull);
+  // The reported fitness is on all points.
+  EXPECT_EQ(r.fitness.total, model.evaluate(r.best).total);
+}
+
+TEST(Variation, OffspringRespectTheDepthBoundAndUseLibraryLeaves) {
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{}});
+  EvolveRng rng(3);
+  VariationOptions options;
+  options.maxDepth = 6;
+  std::vector<CsgTree> trees;
+  for (int i = 0; i < 50; ++i) trees.push_back(randomTree(rng, library, 5, 0.7));
+  for (int round = 0; round < 20; ++round) {
+    for (std::size_t i = 0; i + 1 < trees.size(); i += 2) {
+      auto [a, b] = crossover(rng, trees[i], trees[i + 1], options);
+      trees[i] = mutate(rng, a, library, options);
+      trees[i + 1] = b;
+    }
+    for (const CsgTree& t : trees) {
+      ASSERT_LE(t.depth(), 6u);
+      ASSERT_TRUE(leavesAreTheLibrarys(t, library));
+      ASSERT_NO_THROW(t.validate());
+    }
+  }
+}
+
+TEST(Redundancy, RemovesWhatDoesNotChangeTheFitness) {
+  const test::OrientedPoints in = test::cubeFacePoints(10);
+  // extra6: a half-space holding the whole cube; extra7: a sphere far away.
+  const PrimitiveLibrary library =
+      test::cubePlanes({HalfSpace{Vec3::UnitX(), 5.0}, Sphere{Vec3(9, 9, 9), 1.0}});
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  const CsgTree cube = test::cubeTree(library);
+  const CsgTree x = library.leafTree(0);
+  EXPECT_TRUE(normalizeTree(CsgTree::complement(CsgTree::complement(x))).structurallyEqual(x));
+  const CsgTree padded =
+      CsgTree::unite({CsgTree::intersect({cube, library.leafTree(6)}), library.leafTree(7)});
+  const CsgTree cleaned = removeRedundancy(padded, model);
+  EXPECT_TRUE(cleaned.structurallyEqual(cube)) << cleaned.nodeCount();
+  EXPECT_GE(model.evaluate(cleaned).total, model.evaluate(padded).total);
+  // A tree with nothing redundant is left alone.
+  EXPECT_TRUE(removeRedundancy(cube, model).structurallyEqual(cube));
+}
+
+}  // namespace
+}  // namespace csgvox
