@@ -5,6 +5,7 @@
 #include <functional>
 #include <stdexcept>
 
+#include "core/halfspace_bounds.h"
 #include "core/tree_program.h"
 
 namespace csgvox {
@@ -128,26 +129,62 @@ NodePtr replaced(const NodePtr& node, const Node* target, const NodePtr& replace
   return std::make_shared<Node>(node->kind, std::move(children));
 }
 
+void collectIntersected(const Node& node, Aabb& box, std::vector<HalfSpace>& halfSpaces);
+
 Aabb boundsOf(const Node& node) {
   switch (node.kind) {
     case NodeKind::Primitive:
       return node.primitive.bounds();
     case NodeKind::Complement:
       return Aabb::everything();
-    case NodeKind::Difference:
-      return boundsOf(*node.children.front());
     case NodeKind::Union: {
       Aabb b;
       for (const NodePtr& c : node.children) b.extend(boundsOf(*c));
       return b;
     }
+    case NodeKind::Difference:
     case NodeKind::Intersection: {
+      // Half-spaces anywhere in a chain of intersections (and subtracted
+      // ones) bound the solid together, which no one of them does alone.
       Aabb b = Aabb::everything();
-      for (const NodePtr& c : node.children) b = b.intersected(boundsOf(*c));
-      return b;
+      std::vector<HalfSpace> halfSpaces;
+      collectIntersected(node, b, halfSpaces);
+      return halfSpaceIntersectionBounds(halfSpaces, b);
     }
   }
   return {};
+}
+
+// The operands of an intersection, through nested intersections and the
+// subtracted operands of differences: half-spaces (a subtracted or
+// complemented half-space is the opposite half-space) into `halfSpaces`, the
+// bounds of everything else intersected into `box`.
+void collectIntersected(const Node& node, Aabb& box, std::vector<HalfSpace>& halfSpaces) {
+  const auto add = [&](const Node& operand, bool flipped) {
+    const Node* leaf = &operand;
+    if (operand.kind == NodeKind::Complement) {
+      leaf = operand.children.front().get();
+      flipped = !flipped;
+    }
+    if (leaf->kind == NodeKind::Primitive) {
+      if (const HalfSpace* h = leaf->primitive.as<HalfSpace>()) {
+        halfSpaces.push_back(flipped ? HalfSpace{-h->normal, -h->offset} : *h);
+        return;
+      }
+    }
+    if (flipped) return;  // the complement of anything else bounds nothing
+    if (operand.kind == NodeKind::Intersection || operand.kind == NodeKind::Difference) {
+      collectIntersected(operand, box, halfSpaces);
+    } else {
+      box = box.intersected(boundsOf(operand));
+    }
+  };
+  if (node.kind == NodeKind::Difference) {
+    add(*node.children.front(), false);
+    for (std::size_t k = 1; k < node.children.size(); ++k) add(*node.children[k], true);
+    return;
+  }
+  for (const NodePtr& c : node.children) add(*c, false);
 }
 
 std::size_t depthOf(const Node& node) {

@@ -61,13 +61,28 @@ struct MinMaxStack {
   std::vector<std::int32_t> ids;  // 2·leaf + (1 when negated)
 };
 
+// a = op(a, b) with the id of the operand taken; branch-free so that it
+// vectorises (ties keep a, as std::min and std::max do).
 template <bool kMin>
 void select(float* __restrict va, std::int32_t* __restrict ia, const float* __restrict vb,
             const std::int32_t* __restrict ib, std::size_t m) {
   for (std::size_t i = 0; i < m; ++i) {
-    const bool takeB = kMin ? vb[i] < va[i] : vb[i] > va[i];
-    va[i] = takeB ? vb[i] : va[i];
-    ia[i] = takeB ? ib[i] : ia[i];
+    const float a = va[i], b = vb[i];
+    const std::int32_t takeB = -std::int32_t(kMin ? b < a : b > a);
+    va[i] = kMin ? std::min(a, b) : std::max(a, b);
+    ia[i] = (ia[i] & ~takeB) | (ib[i] & takeB);
+  }
+}
+
+// The same with a leaf's (negated) field as the second operand.
+template <bool kMin, bool kNeg>
+void selectLeaf(float* __restrict va, std::int32_t* __restrict ia, const float* __restrict src,
+                std::int32_t code, std::size_t m) {
+  for (std::size_t i = 0; i < m; ++i) {
+    const float a = va[i], b = kNeg ? -src[i] : src[i];
+    const std::int32_t takeB = -std::int32_t(kMin ? b < a : b > a);
+    va[i] = kMin ? std::min(a, b) : std::max(a, b);
+    ia[i] = (ia[i] & ~takeB) | (code & takeB);
   }
 }
 
@@ -120,17 +135,41 @@ TermSums minMaxTerms(const Program& program, const PointTables& t) {
           --top;
           break;
         }
+        default: {
+          const float* src = t.values + std::size_t(ins.leaf) * t.n + start;
+          const bool neg = ins.op == Op::MinLeafNeg || ins.op == Op::MaxLeafNeg;
+          const std::int32_t code = 2 * std::int32_t(ins.leaf) + (neg ? 1 : 0);
+          float* a = v - kChunk;
+          std::int32_t* ia = id - kChunk;
+          switch (ins.op) {
+            case Op::MinLeaf:
+              selectLeaf<true, false>(a, ia, src, code, m);
+              break;
+            case Op::MinLeafNeg:
+              selectLeaf<true, true>(a, ia, src, code, m);
+              break;
+            case Op::MaxLeaf:
+              selectLeaf<false, false>(a, ia, src, code, m);
+              break;
+            default:
+              selectLeaf<false, true>(a, ia, src, code, m);
+              break;
+          }
+          break;
+        }
       }
     }
+    // Four interleaved sums in a fixed order: the same result on every
+    // instruction set, without one long chain of dependent additions.
     const std::int32_t* id = stack.ids.data();
-    double distance = 0.0, normal = 0.0;
+    double distance[4] = {0, 0, 0, 0}, normal[4] = {0, 0, 0, 0};
     for (std::size_t i = 0; i < m; ++i) {
       const std::size_t leaf = std::size_t(id[i]) >> 1;
-      distance += t.distanceTerm[leaf * t.n + start + i];
-      normal += t.normalTerm[std::size_t(id[i]) * t.n + start + i];
+      distance[i & 3] += t.distanceTerm[leaf * t.n + start + i];
+      normal[i & 3] += t.normalTerm[std::size_t(id[i]) * t.n + start + i];
     }
-    sums.distance += distance;
-    sums.normal += normal;
+    sums.distance += (distance[0] + distance[1]) + (distance[2] + distance[3]);
+    sums.normal += (normal[0] + normal[1]) + (normal[2] + normal[3]);
   }
   return sums;
 }
@@ -229,6 +268,8 @@ TermSums smoothTerms(const Program& program, const PointTables& t, const Ops& op
           combineSmooth(s, at - 2 * kChunk, at - kChunk, m, ins.op == Op::Min, ops);
           --top;
           break;
+        default:
+          throw std::logic_error("smooth fitness: fused instruction");
       }
     }
     double distance = 0.0, normal = 0.0;
@@ -264,17 +305,36 @@ Program compile(const CsgTree& tree, const PrimitiveLibrary& library) {
   for (const Instr& ins : program.code) {
     if (ins.op == Op::Leaf || ins.op == Op::LeafNeg) {
       program.stackDepth = std::max(program.stackDepth, ++depth);
-    } else if (ins.op != Op::Negate) {
+    } else if (ins.op == Op::Min || ins.op == Op::Max) {
       --depth;
     }
   }
   return program;
 }
 
+Program fused(const Program& program) {
+  Program out;
+  out.stackDepth = program.stackDepth;
+  const std::vector<Instr>& code = program.code;
+  for (std::size_t k = 0; k < code.size(); ++k) {
+    const bool leaf = code[k].op == Op::Leaf || code[k].op == Op::LeafNeg;
+    if (leaf && k + 1 < code.size() && (code[k + 1].op == Op::Min || code[k + 1].op == Op::Max)) {
+      const bool neg = code[k].op == Op::LeafNeg;
+      const Op op = code[k + 1].op == Op::Min ? (neg ? Op::MinLeafNeg : Op::MinLeaf)
+                                              : (neg ? Op::MaxLeafNeg : Op::MaxLeaf);
+      out.code.push_back({op, code[k].leaf});
+      ++k;
+    } else {
+      out.code.push_back(code[k]);
+    }
+  }
+  return out;
+}
+
 TermSums pointTerms(const Program& program, const PointTables& tables, SetOperationKind ops) {
   switch (ops) {
     case SetOperationKind::MinMax:
-      return minMaxTerms(program, tables);
+      return minMaxTerms(fused(program), tables);
     case SetOperationKind::RFunction:
       return smoothTerms(program, tables, RFunctionPartials{});
   }
@@ -318,6 +378,8 @@ std::size_t voxelMismatch(const Program& program, const std::uint64_t* insideSet
         --top;
         break;
       }
+      default:
+        throw std::logic_error("voxel fitness: fused instruction");
     }
   }
   std::size_t count = 0;

@@ -15,8 +15,20 @@
 namespace csgvox::fitness_detail {
 
 /// Postfix instructions. Leaf pushes a primitive's field, LeafNeg its
-/// negation; Negate negates the top; Min and Max pop two and push one.
-enum class Op : std::uint8_t { Leaf, LeafNeg, Negate, Min, Max };
+/// negation; Negate negates the top; Min and Max pop two and push one;
+/// MinLeaf, MaxLeaf (and their Neg forms) combine the top with a primitive's
+/// (negated) field in place — a Leaf followed by Min or Max, fused.
+enum class Op : std::uint8_t {
+  Leaf,
+  LeafNeg,
+  Negate,
+  Min,
+  Max,
+  MinLeaf,
+  MinLeafNeg,
+  MaxLeaf,
+  MaxLeafNeg
+};
 
 struct Instr {
   Op op = Op::Leaf;

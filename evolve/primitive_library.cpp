@@ -30,6 +30,19 @@ std::optional<std::size_t> PrimitiveLibrary::indexOf(const Node& leaf) const {
   return std::nullopt;
 }
 
+PrimitiveLibrary PrimitiveLibrary::ofTree(const CsgTree& tree) {
+  std::vector<Primitive> primitives;
+  std::vector<std::string> names;
+  for (const Node* leaf : tree.leaves()) {
+    bool known = false;
+    for (const Primitive& p : primitives) known = known || p == leaf->primitive;
+    if (known) continue;
+    primitives.push_back(leaf->primitive);
+    names.push_back(leaf->name);
+  }
+  return PrimitiveLibrary(std::move(primitives), std::move(names));
+}
+
 namespace {
 
 NodePtr adoptNode(const PrimitiveLibrary& library, const NodePtr& node) {

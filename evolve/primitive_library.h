@@ -22,6 +22,10 @@ class PrimitiveLibrary {
   ///        invalid, or there are more than 32767 primitives.
   PrimitiveLibrary(std::vector<Primitive> primitives, std::vector<std::string> names);
 
+  /// The library of a tree's own leaves (equal primitives once, in
+  /// depth-first order, with their names).
+  static PrimitiveLibrary ofTree(const CsgTree& tree);
+
   std::size_t size() const { return leaves_.size(); }
   bool empty() const { return leaves_.empty(); }
   const Primitive& primitive(std::size_t i) const { return leaves_[i]->primitive; }

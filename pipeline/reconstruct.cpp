@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/nearest_neighbors.h"
+#include "core/tree_program.h"
 
 namespace csgvox {
 namespace {
@@ -44,82 +45,45 @@ class StageClock {
 }  // namespace
 
 double Reconstruction::voxelIou() const {
-  const std::size_t either = VoxelSet::countOr(construction.voxels, labels.inside);
+  const std::size_t either = VoxelSet::countOr(voxels, labels.inside);
   if (either == 0) return 1.0;
-  return double(VoxelSet::countAnd(construction.voxels, labels.inside)) / double(either);
+  return double(VoxelSet::countAnd(voxels, labels.inside)) / double(either);
 }
 
-Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options,
-                           const StageCallback& onStage, const ProgressCallback& progress) {
-  Reconstruction out;
-  StageClock clock(out, onStage);
-  const bool limited = options.timeLimit > 0.0;
-  const Clock::time_point deadline =
-      limited ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                   std::chrono::duration<double>(options.timeLimit))
-              : Clock::time_point::max();
-  const auto pastDeadline = [&] { return limited && Clock::now() > deadline; };
-  const auto timedOut = [&](std::string_view stage) {
-    out.status = Reconstruction::Status::TimedOut;
-    out.message = "time limit reached during " + std::string(stage);
-    out.timeLimitHit = true;
-    return out;
-  };
+std::string_view methodName(Method method) { return method == Method::Gp ? "gp" : "voxel"; }
 
-  // Detection stops at the deadline. After it, a limit never costs the
-  // tree: labels and description sets run to the end, and the optimisation
-  // stops searching at the deadline and keeps the best tree it has.
-  DetectAndFitOptions fo;
-  fo.resolution = options.resolution;
-  fo.seed = options.seed;
-  fo.detect = options.detect;
-  const auto report = [&](double fraction, std::string_view step) {
-    if (progress) progress(fraction, step);
-    return true;
-  };
-  SurfacesAndCandidates found =
-      detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
-        report(fraction, step);
-        return !pastDeadline();
-      });
-  out.detection = std::move(found.detection);
-  if (out.detection.status == DetectionResult::Status::Cancelled) return timedOut("detection");
-  if (!out.detection.ok()) {
-    out.status = Reconstruction::Status::NoSurfaces;
-    out.message = out.detection.message;
-    return out;
-  }
-  out.timings.push_back(
-      {"detect", found.detectSeconds + found.refineSeconds + found.regularizeSeconds});
-  out.timings.push_back({"hypotheses", found.hypothesisSeconds});
-  out.grid = std::move(found.grid);
-  out.hypotheses = std::move(found.hypotheses);
-  out.timeLimitHit = pastDeadline();
-  if (options.memoryLimit > 0) {
-    const double perVoxel =
-        3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
-    const double need = perVoxel * double(out.grid.voxelCount());
-    if (need > double(options.memoryLimit)) {
-      // Voxel count grows with the cube of the resolution.
-      const double fit = double(options.resolution) * std::cbrt(double(options.memoryLimit) / need);
-      out.status = Reconstruction::Status::TooLarge;
-      char buf[256];
-      std::snprintf(buf, sizeof(buf),
-                    "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
-                    "than the %.1f GiB allowed; use a resolution of at most %d",
-                    options.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
-                    out.grid.voxelCount(), double(options.memoryLimit) / double(1u << 30),
-                    int(fit));
-      out.message = buf;
-      return out;
+Method methodFromName(std::string_view name) {
+  if (name == "voxel") return Method::Voxel;
+  if (name == "gp") return Method::Gp;
+  throw std::invalid_argument("unknown method '" + std::string(name) + "' (voxel or gp)");
+}
+
+namespace {
+
+// The voxels whose centre a tree holds.
+VoxelSet treeVoxels(const CsgTree& tree, const VoxelGrid& grid) {
+  VoxelSet out(grid.voxelCount());
+  const TreeProgram program(tree);
+  const auto& d = grid.dims();
+  std::vector<Vec3> row(static_cast<std::size_t>(d[0]));
+  std::vector<double> f(row.size());
+  for (int k = 0; k < d[2]; ++k) {
+    for (int j = 0; j < d[1]; ++j) {
+      for (int i = 0; i < d[0]; ++i) row[std::size_t(i)] = grid.center(i, j, k);
+      program.values(row, f);
+      const std::size_t base = grid.index(0, j, k);
+      for (std::size_t i = 0; i < row.size(); ++i) {
+        if (f[i] >= 0.0) out.set(base + i);
+      }
     }
   }
+  return out;
+}
 
-  clock.start("labels");
-  out.labels = labelVoxels(out.grid, scan, options.labels);
-  clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
-               " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
-
+// The optimisations of Wu et al. on the labelled voxels.
+void voxelMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
+                 StageClock& clock, Clock::time_point deadline,
+                 const std::function<bool(double, std::string_view)>& report) {
   clock.start("description_sets");
   std::vector<CsgTree> candidates;
   candidates.reserve(out.hypotheses.candidates.size());
@@ -144,21 +108,164 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   co.subtree.deadline = std::min(co.subtree.deadline, deadline);
   co.unionChoice.deadline = std::min(co.unionChoice.deadline, deadline);
   out.construction = constructCsg(candidates, descriptions, out.labels.inside, co, report);
-  out.timeLimitHit = out.timeLimitHit || pastDeadline();
+  out.timeLimitHit = out.timeLimitHit || Clock::now() > deadline;
   const ConstructStats& st = out.construction.stats;
   clock.finish(std::to_string(st.chosen) + " of " + std::to_string(st.unionCandidates) +
                " union candidates" + (st.provedOptimal ? ", proved optimal" : ""));
-  if (out.construction.tree.empty()) {
+  out.tree = out.construction.tree;
+  out.voxels = out.construction.voxels;
+}
+
+// The genetic-programming baseline on the points.
+void gpMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
+              StageClock& clock, Clock::time_point deadline, const ProgressCallback& progress) {
+  clock.start("evolve");
+  GpOptions go = options.gp;
+  go.evolve.seed = options.seed;
+  if (deadline != Clock::time_point::max()) {
+    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    go.evolve.timeLimit = std::max(left, 1e-3);
+  }
+  VoxelTarget target;
+  if (go.fitness.voxelWeight > 0.0) target = {out.grid, out.labels.inside};
+  const std::size_t most = go.evolve.maxGenerations;
+  out.gp = runGp(
+      scan, out.detection.surfaces, go,
+      [&](const GenerationReport& g) {
+        if (progress) {
+          char step[160];
+          std::snprintf(step, sizeof(step), "generation %zu, best %.6g, %zu nodes, %.0f gen/s%s",
+                        g.generation, g.bestFitness, g.bestNodes,
+                        g.seconds > 0 ? double(g.generation) / g.seconds : 0.0,
+                        g.rough ? " (rough)" : "");
+          progress(most > 0 ? double(g.generation) / double(most) : 1.0, step);
+        }
+        return true;
+      },
+      go.fitness.voxelWeight > 0.0 ? &target : nullptr);
+  out.timeLimitHit = out.timeLimitHit || out.gp.search.stop == EvolveStop::TimeLimit;
+  const EvolveResult& s = out.gp.search;
+  char summary[200];
+  std::snprintf(summary, sizeof(summary),
+                "%zu generations (%s), %zu trees evaluated, fitness %.6g, %zu primitives in the "
+                "library (%zu separators)",
+                s.generations, std::string(evolveStopName(s.stop)).c_str(), s.evaluations,
+                s.fitness.total, out.gp.primitives.library.size(), out.gp.primitives.separators);
+  clock.finish(summary);
+  out.tree = out.gp.tree;
+  out.voxels = treeVoxels(out.tree, out.grid);
+}
+
+Clock::time_point deadlineOf(double timeLimit) {
+  return timeLimit > 0.0 ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                              std::chrono::duration<double>(timeLimit))
+                         : Clock::time_point::max();
+}
+
+// Everything after detection; `out` holds the detection.
+Reconstruction afterDetection(Reconstruction out, const PointCloud& scan,
+                              const SurfacesAndCandidates& found, const ReconstructOptions& options,
+                              const StageCallback& onStage, const ProgressCallback& progress,
+                              Clock::time_point deadline) {
+  StageClock clock(out, onStage);
+  out.method = options.method;
+  out.grid = found.grid;
+  out.hypotheses = found.hypotheses;
+  out.timeLimitHit = Clock::now() > deadline;
+  if (options.method == Method::Voxel && options.memoryLimit > 0) {
+    const double perVoxel =
+        3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
+    const double need = perVoxel * double(out.grid.voxelCount());
+    if (need > double(options.memoryLimit)) {
+      // Voxel count grows with the cube of the resolution.
+      const double fit = double(options.resolution) * std::cbrt(double(options.memoryLimit) / need);
+      out.status = Reconstruction::Status::TooLarge;
+      char buf[256];
+      std::snprintf(buf, sizeof(buf),
+                    "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
+                    "than the %.1f GiB allowed; use a resolution of at most %d",
+                    options.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
+                    out.grid.voxelCount(), double(options.memoryLimit) / double(1u << 30),
+                    int(fit));
+      out.message = buf;
+      return out;
+    }
+  }
+
+  clock.start("labels");
+  out.labels = labelVoxels(out.grid, scan, options.labels);
+  clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
+               " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
+
+  const auto report = [&](double fraction, std::string_view step) {
+    if (progress) progress(fraction, step);
+    return true;
+  };
+  if (options.method == Method::Gp) {
+    gpMethod(out, scan, options, clock, deadline, progress);
+  } else {
+    voxelMethod(out, scan, options, clock, deadline, report);
+  }
+  if (out.tree.empty()) {
     out.status = Reconstruction::Status::NoCombination;
     out.message = "no combination of the detected primitives explains the scan";
     return out;
   }
-  out.tree = out.construction.tree;
   out.status = Reconstruction::Status::Ok;
   out.message = std::to_string(out.tree.primitiveCount()) + " primitives, " +
                 std::to_string(out.tree.operationCount()) + " operations, depth " +
                 std::to_string(out.tree.depth());
   return out;
+}
+
+}  // namespace
+
+Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options,
+                           const StageCallback& onStage, const ProgressCallback& progress) {
+  Reconstruction out;
+  const Clock::time_point deadline = deadlineOf(options.timeLimit);
+  const auto pastDeadline = [&] { return Clock::now() > deadline; };
+
+  // Detection stops at the deadline. After it, a limit never costs the
+  // tree: labels and description sets run to the end, and the optimisation
+  // (or the search) stops at the deadline and keeps the best tree it has.
+  DetectAndFitOptions fo;
+  fo.resolution = options.resolution;
+  fo.seed = options.seed;
+  fo.detect = options.detect;
+  SurfacesAndCandidates found =
+      detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
+        if (progress) progress(fraction, step);
+        return !pastDeadline();
+      });
+  out.detection = found.detection;
+  if (out.detection.status == DetectionResult::Status::Cancelled) {
+    out.status = Reconstruction::Status::TimedOut;
+    out.message = "time limit reached during detection";
+    out.timeLimitHit = true;
+    return out;
+  }
+  if (!out.detection.ok()) {
+    out.status = Reconstruction::Status::NoSurfaces;
+    out.message = out.detection.message;
+    return out;
+  }
+  out.timings.push_back(
+      {"detect", found.detectSeconds + found.refineSeconds + found.regularizeSeconds});
+  out.timings.push_back({"hypotheses", found.hypothesisSeconds});
+  return afterDetection(std::move(out), scan, found, options, onStage, progress, deadline);
+}
+
+Reconstruction reconstructDetected(const PointCloud& scan, const SurfacesAndCandidates& found,
+                                   const ReconstructOptions& options, const StageCallback& onStage,
+                                   const ProgressCallback& progress) {
+  if (!found.ok()) throw std::invalid_argument("reconstructDetected: the detection found nothing");
+  if (!scan.hasNormals())
+    throw std::invalid_argument("reconstructDetected: the scan has no normals");
+  Reconstruction out;
+  out.detection = found.detection;
+  return afterDetection(std::move(out), scan, found, options, onStage, progress,
+                        deadlineOf(options.timeLimit));
 }
 
 }  // namespace csgvox

@@ -16,6 +16,7 @@
 #include "core/progress.h"
 #include "optimize/csg_construction.h"
 #include "pipeline/detect_and_fit.h"
+#include "pipeline/gp_method.h"
 #include "primitives/hypotheses.h"
 #include "primitives/surface_detection.h"
 #include "voxel/description_sets.h"
@@ -24,13 +25,27 @@
 
 namespace csgvox {
 
+/// How the tree is built from the detected surfaces.
+enum class Method {
+  Voxel,  ///< Wu et al.'s bounded hypotheses and two binary optimisations over voxels
+  Gp,     ///< the genetic-programming baseline (Fayolle & Pasko 2016) on the points
+};
+
+/// "voxel" or "gp".
+std::string_view methodName(Method method);
+/// Inverse of methodName. @throw std::invalid_argument for other names.
+Method methodFromName(std::string_view name);
+
 /// Options of reconstruct().
 struct ReconstructOptions {
-  int resolution = 64;         ///< voxels along the longest side of the part's oriented box
-  std::uint64_t seed = 1;      ///< seeds detection and hypotheses; same seed, same tree
-  DetectOptions detect;        ///< surface detection (its seed is replaced by `seed`)
-  LabelOptions labels;         ///< voxel labelling
-  ConstructOptions construct;  ///< the two optimisations (snapDistance 0: one voxel)
+  Method method = Method::Voxel;  ///< how the tree is built
+  int resolution = 64;            ///< voxels along the longest side of the part's oriented box
+  std::uint64_t seed = 1;         ///< seeds detection and hypotheses; same seed, same tree
+  DetectOptions detect;           ///< surface detection (its seed is replaced by `seed`)
+  LabelOptions labels;            ///< voxel labelling
+  ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
+  GpOptions gp;                ///< gp method: the search (its seed and time limit are set from
+                               ///< `seed` and `timeLimit`)
   /// Wall-clock seconds for the whole call (0: none). Detection past the
   /// limit fails (status TimedOut); after detection a limit never costs the
   /// tree: labels and description sets run to their end, and the
@@ -68,7 +83,10 @@ struct Reconstruction {
   HypothesisSet hypotheses;
   VoxelGrid grid;
   VoxelLabels labels;
-  Construction construction;
+  Method method = Method::Voxel;   ///< the method that built `tree`
+  Construction construction;       ///< voxel method: the optimisations' result
+  GpResult gp;                     ///< gp method: the search's result
+  VoxelSet voxels;                 ///< voxels whose centre `tree` holds
   std::vector<StageTime> timings;  ///< in pipeline order
   bool timeLimitHit = false;       ///< the limit stopped a search early
 
@@ -85,5 +103,15 @@ struct Reconstruction {
 Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options = {},
                            const StageCallback& onStage = {},
                            const ProgressCallback& progress = {});
+
+/// The stages after detection (labels, then the method's own), on surfaces
+/// and candidates detectAndFit() already made for this scan with the same
+/// resolution and seed: what `csgvox compare` runs once per method. The time
+/// limit counts from this call. `found` must be ok().
+/// @throw std::invalid_argument when `found` is not ok() or the scan has no normals.
+Reconstruction reconstructDetected(const PointCloud& scan, const SurfacesAndCandidates& found,
+                                   const ReconstructOptions& options = {},
+                                   const StageCallback& onStage = {},
+                                   const ProgressCallback& progress = {});
 
 }  // namespace csgvox

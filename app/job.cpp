@@ -1,0 +1,235 @@
+#include "app/job.h"
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+#include "app/options.h"
+#include "evolve/fitness.h"
+#include "io/mesh_files.h"
+#include "io/report.h"
+#include "io/scad_export.h"
+#include "io/text_export.h"
+#include "io/tree_json.h"
+#include "mesh/fit_metrics.h"
+#include "mesh/mesh_export.h"
+
+namespace csgvox::app {
+
+void addJobOptions(CLI::App& app, JobSettings& s) {
+  app.add_option("--method", s.method,
+                 "How the tree is built: voxel (bounded hypotheses and Wu's two binary "
+                 "optimisations over voxel labels) or gp (the genetic-programming baseline of "
+                 "Fayolle & Pasko 2016: unbounded surfaces and separators combined by a genetic "
+                 "search on the points)")
+      ->check(CLI::IsMember({"voxel", "gp"}));
+  app.add_option("--res", s.resolution, "Voxels along the longest side of the part")
+      ->check(inRange(8, 1024));
+  app.add_option("--seed", s.seed, "Random seed; the same seed gives the same tree")
+      ->check(nonNegativeInteger());
+  app.add_option("--label", s.labelMethod,
+                 "Voxel labelling: winding (generalised winding number) or vote (Wu's K-nearest "
+                 "normal vote)")
+      ->check(CLI::IsMember({"winding", "vote"}));
+  app.add_option("--label-boundary", s.boundary,
+                 "Voxels holding scan points: centre (labelled at their centre like every other "
+                 "voxel; default) or inside (always inside, Wu's rule)")
+      ->check(CLI::IsMember({"centre", "inside"}));
+  app.add_option("-K,--neighbors", s.pipeline.labels.neighbors, "vote: nearest points per voxel")
+      ->check(inRange(1, 1000));
+  app.add_option("--vote-epsilon", s.pipeline.labels.epsilon,
+                 "vote: outside when more than this fraction of neighbours face the voxel")
+      ->check(inRange(0.0, 1.0));
+  app.add_option("--alpha", s.pipeline.construct.subtree.alpha,
+                 "voxel: weight of the fit term of Wu Eq. 4")
+      ->check(inRange(0.0, 100.0));
+  app.add_option("--beta", s.pipeline.construct.unionChoice.beta,
+                 "voxel: weight of the fit term of Wu Eq. 6")
+      ->check(inRange(0.0, 100.0));
+  app.add_option("--time-limit", s.pipeline.timeLimit,
+                 "Seconds for the reconstruction (0: none). Detection past it fails; the "
+                 "optimisations and the genetic search past it keep the best tree found so far")
+      ->check(inRange(0.0, 1e6));
+  app.add_option("--mesh-res", s.meshResolution, "Resolution of mesh.ply")->check(inRange(8, 2048));
+  GpOptions& gp = s.pipeline.gp;
+  app.add_option("--population", gp.evolve.population, "gp: creatures per generation")
+      ->check(inRange(3, 100000));
+  app.add_option("--generations", gp.evolve.maxGenerations, "gp: generations at most")
+      ->check(inRange(0, 1e7));
+  app.add_option("--stall", gp.evolve.stallGenerations,
+                 "gp: stop after this many generations without improvement (0: never)")
+      ->check(inRange(0, 1e7));
+  app.add_option("--crossover", gp.evolve.crossoverRate, "gp: crossover probability")
+      ->check(inRange(0.0, 1.0));
+  app.add_option("--mutation", gp.evolve.mutationRate, "gp: mutation probability")
+      ->check(inRange(0.0, 1.0));
+  app.add_option("--max-depth", gp.evolve.variation.maxDepth, "gp: deepest tree (levels)")
+      ->check(inRange(2, 1000));
+  app.add_option("--operations", s.operations,
+                 "gp: field of the set operations in the fitness: minmax (as published) or "
+                 "rfunction (the solid is the same)")
+      ->check(CLI::IsMember({"minmax", "rfunction"}));
+  app.add_option("--angle", gp.fitness.angleTolerance,
+                 "gp: normal tolerance alpha of Eq. 7, degrees (about 35 for noisy scans)")
+      ->check(inRange(0.1, 180.0));
+  app.add_option("--distance", gp.fitness.distanceTolerance,
+                 "gp: distance tolerance epsilon of Eq. 7, fraction of the scan's diagonal")
+      ->check(inRange(1e-6, 1.0));
+  app.add_option("--voxel-weight", gp.fitness.voxelWeight,
+                 "gp: weight of the volumetric term (tree against the voxel labels); 0 as "
+                 "published")
+      ->check(inRange(0.0, 1e6));
+  app.add_option("--rough-points", gp.roughPoints,
+                 "gp: generations use at most this many points until the search stalls, then all "
+                 "(0: always all)")
+      ->check(inRange(0, 1e9));
+  app.add_flag("!--no-separators", gp.primitives.separators,
+               "gp: no separating half-spaces around the curved surfaces");
+}
+
+ReconstructOptions pipelineOptions(const JobSettings& s) {
+  ReconstructOptions o = s.pipeline;
+  o.seed = s.seed;
+  o.resolution = s.resolution;
+  o.method = methodFromName(s.method);
+  o.labels.method = labelMethodFromName(s.labelMethod);
+  o.labels.boundary = s.boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
+  o.gp.fitness.operations =
+      s.operations == "rfunction" ? SetOperationKind::RFunction : SetOperationKind::MinMax;
+  return o;
+}
+
+namespace {
+
+std::string fmt(const char* format, double a, double b = 0.0) {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), format, a, b);
+  return buf;
+}
+
+// Eq. 7 of the tree on every scan point with the gp settings' tolerances and
+// min/max, whatever built the tree: the figure `compare` ranks methods by.
+Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobSettings& s) {
+  FitnessOptions fo = s.pipeline.gp.fitness;
+  fo.operations = SetOperationKind::MinMax;
+  fo.voxelWeight = 0.0;
+  const FitnessModel model(scan.cloud.points, scan.cloud.normals, scan.cloud.diagonal(),
+                           PrimitiveLibrary::ofTree(tree), fo);
+  return model.evaluate(tree);
+}
+
+}  // namespace
+
+nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::path& scanPath,
+                                const Scan& scan, const Reconstruction& rec,
+                                const JobSettings& settings, nlohmann::ordered_json timings,
+                                const Console& console) {
+  const CsgTree& tree = rec.tree;
+  Stopwatch watch;
+  writeTreeJson(output.path("tree.json"), tree);
+  writeScad(output.path("tree.scad"), tree);
+  writeTreeText(output.path("tree.txt"), tree);
+  MeshOptions mo;
+  mo.resolution = settings.meshResolution;
+  writeMesh(output.path("mesh.ply"), meshTree(tree, mo, console.progress()));
+  timings["export"] = watch.seconds();
+
+  // The tree is the result: a metric that cannot be computed is a warning
+  // in the report, not a failed job.
+  watch = Stopwatch();
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+  std::optional<FitMetrics> fit;
+  try {
+    FitOptions fo;
+    fo.surfaceSamples = 100000;
+    fo.seed = settings.seed;
+    fit = evaluateFit(tree, scan.cloud, fo);
+  } catch (const std::exception& e) {
+    warnings.push_back(std::string("fit metrics: ") + e.what());
+    console.info("warning: fit metrics not computed: " + std::string(e.what()));
+  }
+  const Fitness eq7 = pointFitness(tree, scan, settings);
+  timings["metrics"] = watch.seconds();
+
+  const ReconstructOptions& po = settings.pipeline;
+  nlohmann::ordered_json report;
+  report["status"] = "ok";
+  report["input"] = scanJson(scanPath, scan);
+  nlohmann::ordered_json parameters = {{"method", settings.method},
+                                       {"res", settings.resolution},
+                                       {"seed", settings.seed},
+                                       {"label", settings.labelMethod},
+                                       {"label_boundary", settings.boundary},
+                                       {"time_limit_s", po.timeLimit}};
+  if (rec.method == Method::Voxel) {
+    parameters["alpha"] = po.construct.subtree.alpha;
+    parameters["beta"] = po.construct.unionChoice.beta;
+  } else {
+    const GpOptions& gp = po.gp;
+    parameters["population"] = gp.evolve.population;
+    parameters["generations"] = gp.evolve.maxGenerations;
+    parameters["stall"] = gp.evolve.stallGenerations;
+    parameters["crossover"] = gp.evolve.crossoverRate;
+    parameters["mutation"] = gp.evolve.mutationRate;
+    parameters["max_depth"] = gp.evolve.variation.maxDepth;
+    parameters["operations"] = settings.operations;
+    parameters["distance_tolerance"] = gp.fitness.distanceTolerance;
+    parameters["angle_tolerance_deg"] = gp.fitness.angleTolerance;
+    parameters["voxel_weight"] = gp.fitness.voxelWeight;
+    parameters["rough_points"] = gp.roughPoints;
+    parameters["separators"] = gp.primitives.separators;
+  }
+  report["parameters"] = std::move(parameters);
+  const auto& dims = rec.grid.dims();
+  report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}}, {"voxel_size", rec.grid.voxelSize()}};
+  if (rec.method == Method::Voxel) {
+    const ConstructStats& st = rec.construction.stats;
+    report["counts"] = {{"surfaces", rec.detection.surfaces.size()},
+                        {"hypotheses", rec.hypotheses.candidates.size()},
+                        {"usable_roots", st.usableRoots},
+                        {"truncation_roots", st.truncationRoots},
+                        {"subtrees", st.subtrees},
+                        {"union_candidates", st.unionCandidates},
+                        {"chosen", st.chosen},
+                        {"proved_optimal", st.provedOptimal},
+                        {"time_limit_hit", rec.timeLimitHit}};
+  } else {
+    const EvolveResult& s = rec.gp.search;
+    report["counts"] = {{"surfaces", rec.detection.surfaces.size()},
+                        {"library", rec.gp.primitives.library.size()},
+                        {"separators", rec.gp.primitives.separators},
+                        {"generations", s.generations},
+                        {"evaluations", s.evaluations},
+                        {"stop", evolveStopName(s.stop)},
+                        {"clipped_to_scan_box", rec.gp.clipped},
+                        {"time_limit_hit", rec.timeLimitHit}};
+  }
+  report["tree"] = {{"primitives", tree.primitiveCount()},
+                    {"operations", tree.operationCount()},
+                    {"depth", tree.depth()}};
+  nlohmann::ordered_json metrics = {{"voxel_iou", rec.voxelIou()}};
+  if (fit) {
+    metrics["rmse"] = fit->rmse;
+    metrics["rmse_relative"] = fit->rmse / fit->diagonal;
+    metrics["chamfer"] = fit->chamfer;
+    metrics["chamfer_relative"] = fit->chamfer / fit->diagonal;
+    metrics["within_1pct"] = fit->withinFraction;
+    metrics["normal_agreement"] = fit->normalAgreement;
+  }
+  metrics["fitness"] = {{"total", eq7.total},
+                        {"distance_term", eq7.distanceTerm},
+                        {"normal_term", eq7.normalTerm},
+                        {"size_penalty", eq7.sizePenalty},
+                        {"points", scan.cloud.size()}};
+  report["metrics"] = std::move(metrics);
+  report["warnings"] = std::move(warnings);
+  report["timings_s"] = timings;
+  writeJsonFile(output.path("report.json"), report);
+  if (fit) {
+    console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D",
+                     100 * fit->chamfer / fit->diagonal, 100 * fit->rmse / fit->diagonal));
+  }
+  return report;
+}
+
+}  // namespace csgvox::app

@@ -1,0 +1,38 @@
+#include "pipeline/gp_method.h"
+
+#include <optional>
+#include <stdexcept>
+
+namespace csgvox {
+
+GpResult runGp(const PointCloud& scan, std::span<const Surface> surfaces, const GpOptions& options,
+               const GenerationCallback& onGeneration, const VoxelTarget* target) {
+  if (!scan.hasNormals()) throw std::invalid_argument("the gp method needs a scan with normals");
+  GpResult out;
+  out.primitives = gpPrimitives(scan, surfaces, options.primitives);
+  const double diagonal = scan.diagonal();
+  const FitnessModel model(scan.points, scan.normals, diagonal, out.primitives.library,
+                           options.fitness, target);
+  std::optional<FitnessModel> rough;
+  if (options.roughPoints > 0 && scan.size() > options.roughPoints) {
+    std::vector<Vec3> points, normals;
+    for (const std::uint32_t i :
+         spreadSample(scan.size(), options.roughPoints, options.evolve.seed)) {
+      points.push_back(scan.points[i]);
+      normals.push_back(scan.normals[i]);
+    }
+    rough.emplace(points, normals, diagonal, out.primitives.library, options.fitness, target);
+  }
+  out.search = evolve(model, {}, options.evolve, onGeneration, rough ? &*rough : nullptr);
+  out.tree = out.search.best;
+  if (!out.tree.bounds().isBounded()) {
+    // As the baseline does: the solid is cut to the box around the scan.
+    const Aabb& b = out.primitives.clipBox;
+    const CsgTree box = CsgTree::leaf(Box{b.center(), Mat3::Identity(), 0.5 * b.size()}, "bounds");
+    out.tree = CsgTree::intersect({out.tree, box});
+    out.clipped = true;
+  }
+  return out;
+}
+
+}  // namespace csgvox
