@@ -15,7 +15,9 @@
 ///   `subtraction[A,B]` (min(A, −B)), `negation[A]` (−A), leaves TYPE + index
 ///   (`plane0`, `cylinder7`); blanks are allowed between the parts.
 /// The imported leaves carry exact signed distances rather than the
-/// baseline's f (the same solids; a plane's f is a distance only when |n| = 1).
+/// baseline's f: the same solids, but a plane's f is a distance only when
+/// |n| = 1, and behind a cone's apex the baseline's f is minus the distance to
+/// the generator's line, not to the apex.
 
 #include <cstddef>
 #include <filesystem>
