@@ -273,6 +273,51 @@ TEST(GpFiles, EveryOperationOverPlanesAndCylindersMatchesTheReference) {
   }
 }
 
+// Spheres, cones and tori (not in the samples): parameter order and the
+// leaves' values, the baseline's f where it is an exact distance.
+TEST(GpFiles, SphereConeTorusLines) {
+  std::istringstream fitText(
+      "sphere 1 2 3 2\n"
+      "torus 0 0 2 0 0 1 0.5 3\n"
+      "cone 0 0 1 0 0 -1 0.5\n");
+  const std::vector<GpPrimitive> prims = readGpPrimitives(fitText, "three.fit");
+  ASSERT_EQ(prims.size(), 3u);
+  EXPECT_EQ(prims[1].name, "torus1");
+  const auto& torus = std::get<TorusSurface>(prims[1].shape);
+  EXPECT_EQ(torus.minorRadius, 0.5);
+  EXPECT_EQ(torus.majorRadius, 3.0);
+  test::expectNear(torus.axisDir, Vec3::UnitZ(), 0.0);
+  test::expectNear(torus.center, Vec3(0, 0, 1), 0.0);
+  const auto& cone = std::get<ConeSurface>(prims[2].shape);
+  test::expectNear(cone.apex, Vec3(0, 0, -1), 0.0);
+  test::expectNear(cone.axisDir, Vec3::UnitZ(), 0.0);
+  EXPECT_EQ(cone.halfAngle, 0.5);
+
+  const Aabb box{Vec3::Constant(-5), Vec3::Constant(5)};
+  std::istringstream exprText("union[sphere0,subtraction[torus1,cone2]]");
+  const CsgTree tree = readGpExpression(exprText, prims, box, "three_expr.txt");
+  const auto sphere = [](const Vec3& x) { return 2.0 - (x - Vec3(1, 2, 3)).norm(); };
+  const auto torusF = [](const Vec3& x) {
+    return 0.5 - std::hypot(std::hypot(x.x(), x.y()) - 3.0, x.z() - 1.0);
+  };
+  // In front of the apex (z > -1 and outside the apex's normal cone) the
+  // baseline's cone value -(rho cos a - g sin a) is the exact distance.
+  const auto coneF = [](const Vec3& x) {
+    const double g = x.z() + 1.0, rho = std::hypot(x.x(), x.y());
+    return -(std::cos(0.5) * rho - std::sin(0.5) * g);
+  };
+  Rng rng(8);
+  int checked = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3 p = randomPoint(rng, box);
+    if (p.z() + 1.0 < 2.0) continue;  // keep well in front of the apex
+    const double expected = std::max(sphere(p), std::min(torusF(p), -coneF(p)));
+    EXPECT_NEAR(tree.value(p), expected, 1e-12) << test::str(p);
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
+}
+
 TEST(GpFiles, BlanksAnywhereBetweenTheParts) {
   const std::vector<GpPrimitive> prims = readGpPrimitives(kGpDir / "cube.fit");
   const Aabb box = gpClipBox(prims);
