@@ -24,5 +24,6 @@ Command setupSample(CLI::App& app, CommonOptions& common);
 Command setupRender(CLI::App& app, CommonOptions& common);
 Command setupEval(CLI::App& app, CommonOptions& common);
 Command setupDetect(CLI::App& app, CommonOptions& common);
+Command setupImportGp(CLI::App& app, CommonOptions& common);
 
 }  // namespace csgvox::app

@@ -22,12 +22,13 @@ constexpr const char* kDescription =
     "  csgvox detect SCAN -o OUTDIR [--epsilon E] [--min-points M] [--res N] ...\n"
     "  csgvox sample TREE.json -o SCAN.ply [--points N] [--noise R] [--drop K] [--seed S]\n"
     "  csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]\n"
-    "  csgvox eval TREE.json SCAN [--json]\n\n"
+    "  csgvox eval TREE.json SCAN [--json]\n"
+    "  csgvox import-gp FIT EXPR -o {TREE.json,OUTDIR} [--scan SCAN]\n\n"
     "Run 'csgvox <command> --help' for a command's options. Progress and timings go to\n"
     "stderr, results to files. Exit codes: 0 success, 1 bad input or failure, 2 bad usage.";
 
 bool isCommand(const char* arg) {
-  for (const char* c : {"detect", "sample", "render", "eval"}) {
+  for (const char* c : {"detect", "sample", "render", "eval", "import-gp"}) {
     if (std::strcmp(arg, c) == 0) return true;
   }
   return false;
@@ -59,6 +60,10 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[1], "render") == 0) {
       cmd = cli.add_subcommand("render", "Export a CSG tree as a mesh, OpenSCAD, text or JSON");
       run = app::setupRender(*cmd, common);
+    } else if (std::strcmp(argv[1], "import-gp") == 0) {
+      cmd = cli.add_subcommand("import-gp",
+                               "Read the GP baseline's primitive and expression files into a tree");
+      run = app::setupImportGp(*cmd, common);
     } else {
       cmd = cli.add_subcommand("eval", "Fit metrics of a CSG tree against a scan");
       run = app::setupEval(*cmd, common);
