@@ -25,5 +25,6 @@ Command setupRender(CLI::App& app, CommonOptions& common);
 Command setupEval(CLI::App& app, CommonOptions& common);
 Command setupDetect(CLI::App& app, CommonOptions& common);
 Command setupImportGp(CLI::App& app, CommonOptions& common);
+Command setupCompare(CLI::App& app, CommonOptions& common);
 
 }  // namespace csgvox::app

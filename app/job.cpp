@@ -155,13 +155,15 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   nlohmann::ordered_json report;
   report["status"] = "ok";
   report["input"] = scanJson(scanPath, scan);
-  nlohmann::ordered_json parameters = {{"method", settings.method},
+  nlohmann::ordered_json parameters = {{"method", methodName(rec.method)},
                                        {"res", settings.resolution},
                                        {"seed", settings.seed},
                                        {"label", settings.labelMethod},
                                        {"label_boundary", settings.boundary},
                                        {"time_limit_s", po.timeLimit}};
-  if (rec.method == Method::Voxel) {
+  if (rec.method == Method::Imported) {
+    // The tree was read, not built: only the scan-side settings apply.
+  } else if (rec.method == Method::Voxel) {
     parameters["alpha"] = po.construct.subtree.alpha;
     parameters["beta"] = po.construct.unionChoice.beta;
   } else {
@@ -182,7 +184,9 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   report["parameters"] = std::move(parameters);
   const auto& dims = rec.grid.dims();
   report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}}, {"voxel_size", rec.grid.voxelSize()}};
-  if (rec.method == Method::Voxel) {
+  if (rec.method == Method::Imported) {
+    report["counts"] = {{"surfaces", rec.detection.surfaces.size()}};
+  } else if (rec.method == Method::Voxel) {
     const ConstructStats& st = rec.construction.stats;
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()},
                         {"hypotheses", rec.hypotheses.candidates.size()},

@@ -23,12 +23,13 @@ constexpr const char* kDescription =
     "  csgvox sample TREE.json -o SCAN.ply [--points N] [--noise R] [--drop K] [--seed S]\n"
     "  csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]\n"
     "  csgvox eval TREE.json SCAN [--json]\n"
-    "  csgvox import-gp FIT EXPR -o {TREE.json,OUTDIR} [--scan SCAN]\n\n"
+    "  csgvox import-gp FIT EXPR -o {TREE.json,OUTDIR} [--scan SCAN]\n"
+    "  csgvox compare SCAN [--methods voxel,gp] [--import-gp FIT EXPR] [-o OUTDIR]\n\n"
     "Run 'csgvox <command> --help' for a command's options. Progress and timings go to\n"
     "stderr, results to files. Exit codes: 0 success, 1 bad input or failure, 2 bad usage.";
 
 bool isCommand(const char* arg) {
-  for (const char* c : {"detect", "sample", "render", "eval", "import-gp"}) {
+  for (const char* c : {"detect", "sample", "render", "eval", "import-gp", "compare"}) {
     if (std::strcmp(arg, c) == 0) return true;
   }
   return false;
@@ -60,6 +61,10 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[1], "render") == 0) {
       cmd = cli.add_subcommand("render", "Export a CSG tree as a mesh, OpenSCAD, text or JSON");
       run = app::setupRender(*cmd, common);
+    } else if (std::strcmp(argv[1], "compare") == 0) {
+      cmd = cli.add_subcommand("compare",
+                               "Run several methods on one detection and compare their trees");
+      run = app::setupCompare(*cmd, common);
     } else if (std::strcmp(argv[1], "import-gp") == 0) {
       cmd = cli.add_subcommand("import-gp",
                                "Read the GP baseline's primitive and expression files into a tree");

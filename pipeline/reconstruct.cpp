@@ -50,7 +50,17 @@ double Reconstruction::voxelIou() const {
   return double(VoxelSet::countAnd(voxels, labels.inside)) / double(either);
 }
 
-std::string_view methodName(Method method) { return method == Method::Gp ? "gp" : "voxel"; }
+std::string_view methodName(Method method) {
+  switch (method) {
+    case Method::Gp:
+      return "gp";
+    case Method::Imported:
+      return "import-gp";
+    case Method::Voxel:
+      break;
+  }
+  return "voxel";
+}
 
 Method methodFromName(std::string_view name) {
   if (name == "voxel") return Method::Voxel;
@@ -58,10 +68,7 @@ Method methodFromName(std::string_view name) {
   throw std::invalid_argument("unknown method '" + std::string(name) + "' (voxel or gp)");
 }
 
-namespace {
-
-// The voxels whose centre a tree holds.
-VoxelSet treeVoxels(const CsgTree& tree, const VoxelGrid& grid) {
+VoxelSet solidVoxels(const CsgTree& tree, const VoxelGrid& grid) {
   VoxelSet out(grid.voxelCount());
   const TreeProgram program(tree);
   const auto& d = grid.dims();
@@ -79,6 +86,8 @@ VoxelSet treeVoxels(const CsgTree& tree, const VoxelGrid& grid) {
   }
   return out;
 }
+
+namespace {
 
 // The optimisations of Wu et al. on the labelled voxels.
 void voxelMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
@@ -153,7 +162,7 @@ void gpMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOpti
                 s.fitness.total, out.gp.primitives.library.size(), out.gp.primitives.separators);
   clock.finish(summary);
   out.tree = out.gp.tree;
-  out.voxels = treeVoxels(out.tree, out.grid);
+  out.voxels = solidVoxels(out.tree, out.grid);
 }
 
 Clock::time_point deadlineOf(double timeLimit) {

@@ -27,14 +27,19 @@ namespace csgvox {
 
 /// How the tree is built from the detected surfaces.
 enum class Method {
-  Voxel,  ///< Wu et al.'s bounded hypotheses and two binary optimisations over voxels
-  Gp,     ///< the genetic-programming baseline (Fayolle & Pasko 2016) on the points
+  Voxel,     ///< Wu et al.'s bounded hypotheses and two binary optimisations over voxels
+  Gp,        ///< the genetic-programming baseline (Fayolle & Pasko 2016) on the points
+  Imported,  ///< not built here: a tree read from a file (`compare --import-gp`)
 };
 
-/// "voxel" or "gp".
+/// "voxel", "gp" or "import-gp".
 std::string_view methodName(Method method);
-/// Inverse of methodName. @throw std::invalid_argument for other names.
+/// Inverse of methodName for the methods that build trees ("voxel", "gp").
+/// @throw std::invalid_argument for other names.
 Method methodFromName(std::string_view name);
+
+/// The voxels of `grid` whose centre `tree` holds (value >= 0).
+VoxelSet solidVoxels(const CsgTree& tree, const VoxelGrid& grid);
 
 /// Options of reconstruct().
 struct ReconstructOptions {
