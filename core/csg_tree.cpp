@@ -68,33 +68,33 @@ FieldValue evaluateNode(const Node& node, const Vec3& p, const SetOperations& op
   return {};
 }
 
-// Value only, with the set operations chosen at compile time; the same
-// arithmetic and order as evaluateNode.
+// Value only, with the set operations chosen at compile time (MinMaxValues,
+// RFunctionValues, SardfValues); the same arithmetic and order as evaluateNode.
 template <class Ops>
-double valueOf(const Node& node, const Vec3& p) {
+double valueOf(const Node& node, const Vec3& p, const Ops& ops) {
   switch (node.kind) {
     case NodeKind::Primitive:
       return node.primitive.value(p);
     case NodeKind::Complement:
-      return -valueOf<Ops>(*node.children.front(), p);
+      return -valueOf(*node.children.front(), p, ops);
     case NodeKind::Union: {
-      double acc = valueOf<Ops>(*node.children.front(), p);
+      double acc = valueOf(*node.children.front(), p, ops);
       for (std::size_t i = 1; i < node.children.size(); ++i) {
-        acc = Ops::unite(acc, valueOf<Ops>(*node.children[i], p));
+        acc = ops.unite(acc, valueOf(*node.children[i], p, ops));
       }
       return acc;
     }
     case NodeKind::Intersection: {
-      double acc = valueOf<Ops>(*node.children.front(), p);
+      double acc = valueOf(*node.children.front(), p, ops);
       for (std::size_t i = 1; i < node.children.size(); ++i) {
-        acc = Ops::intersect(acc, valueOf<Ops>(*node.children[i], p));
+        acc = ops.intersect(acc, valueOf(*node.children[i], p, ops));
       }
       return acc;
     }
     case NodeKind::Difference: {
-      double acc = valueOf<Ops>(*node.children.front(), p);
+      double acc = valueOf(*node.children.front(), p, ops);
       for (std::size_t i = 1; i < node.children.size(); ++i) {
-        acc = Ops::intersect(acc, -valueOf<Ops>(*node.children[i], p));
+        acc = ops.intersect(acc, -valueOf(*node.children[i], p, ops));
       }
       return acc;
     }
@@ -292,15 +292,25 @@ double CsgTree::value(const Vec3& p, const SetOperations& ops) const {
   if (!root_) return -std::numeric_limits<double>::infinity();
   switch (ops.kind()) {
     case SetOperationKind::MinMax:
-      return valueOf<MinMaxValues>(*root_, p);
+      return valueOf(*root_, p, MinMaxValues{});
     case SetOperationKind::RFunction:
-      return valueOf<RFunctionValues>(*root_, p);
+      return valueOf(*root_, p, RFunctionValues{});
+    case SetOperationKind::Sardf:
+      if (const auto* sardf = dynamic_cast<const SardfOperations*>(&ops)) {
+        return valueOf(*root_, p, sardf->values());
+      }
+      break;
   }
   return evaluate(p, ops).f;
 }
 
 void CsgTree::values(std::span<const Vec3> points, std::span<double> out,
                      SetOperationKind ops) const {
+  TreeProgram(*this).values(points, out, ops);
+}
+
+void CsgTree::values(std::span<const Vec3> points, std::span<double> out,
+                     const SetOperations& ops) const {
   TreeProgram(*this).values(points, out, ops);
 }
 

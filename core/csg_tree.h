@@ -95,9 +95,16 @@ class CsgTree {
   double value(const Vec3& p, const SetOperations& ops = minMaxOperations()) const;
   /// out[i] = value(points[i]) for every point (bit for bit), evaluating each
   /// leaf and each operation over whole arrays of points (see TreeProgram).
-  /// @throw std::invalid_argument when the spans differ in size.
+  /// @throw std::invalid_argument when the spans differ in size, or for
+  ///        SetOperationKind::Sardf (which needs a radius: pass the
+  ///        SardfOperations object to the overload below).
   void values(std::span<const Vec3> points, std::span<double> out,
               SetOperationKind ops = SetOperationKind::MinMax) const;
+  /// out[i] = value(points[i], ops) for every point (bit for bit), batched as
+  /// above; any built-in implementation, SardfOperations with its radius.
+  /// @throw std::invalid_argument when the spans differ in size, or `ops` is
+  ///        of kind Sardf without being a SardfOperations.
+  void values(std::span<const Vec3> points, std::span<double> out, const SetOperations& ops) const;
   /// FRep value and gradient at p.
   FieldValue evaluate(const Vec3& p, const SetOperations& ops = minMaxOperations()) const;
   /// True when p is inside or on the solid.

@@ -1,6 +1,8 @@
 #include "core/set_operations.h"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace csgvox {
 namespace {
@@ -42,7 +44,29 @@ class RFunction final : public SetOperations {
   }
 };
 
+FieldValue fromSardf(const SardfResult& r, const FieldValue& a, const FieldValue& b) {
+  FieldValue out;
+  out.f = r.f;
+  out.gradient = r.d1 * a.gradient + r.d2 * b.gradient;
+  return out;
+}
+
 }  // namespace
+
+SardfOperations::SardfOperations(double radius) : radius_(radius) {
+  if (!(std::isfinite(radius) && radius > 0.0)) {
+    throw std::invalid_argument("SARDF radius must be finite and > 0, got " +
+                                std::to_string(radius));
+  }
+}
+
+FieldValue SardfOperations::intersect(const FieldValue& a, const FieldValue& b) const {
+  return fromSardf(sardfIntersect(a.f, b.f, radius_), a, b);
+}
+
+FieldValue SardfOperations::unite(const FieldValue& a, const FieldValue& b) const {
+  return fromSardf(sardfUnite(a.f, b.f, radius_), a, b);
+}
 
 const SetOperations& minMaxOperations() {
   static const MinMax ops;
@@ -60,8 +84,10 @@ const SetOperations& setOperations(SetOperationKind kind) {
       return minMaxOperations();
     case SetOperationKind::RFunction:
       return rFunctionOperations();
+    case SetOperationKind::Sardf:
+      break;
   }
-  return minMaxOperations();
+  throw std::invalid_argument("setOperations: SARDF needs a radius (use SardfOperations)");
 }
 
 }  // namespace csgvox

@@ -162,7 +162,10 @@ FieldValue TreeProgram::evaluate(const Vec3& p) const {
 }
 
 template <class Ops>
-void TreeProgram::runValues(std::span<const Vec3> points, std::span<double> out) const {
+void TreeProgram::runValues(std::span<const Vec3> points, std::span<double> out,
+                            const Ops& ops) const {
+  const auto unite = [&ops](double a, double b) { return ops.unite(a, b); };
+  const auto intersect = [&ops](double a, double b) { return ops.intersect(a, b); };
   std::vector<double> scratch(stackDepth_ * kChunk);
   for (std::size_t start = 0; start < points.size(); start += kChunk) {
     const std::size_t n = std::min(kChunk, points.size() - start);
@@ -184,11 +187,11 @@ void TreeProgram::runValues(std::span<const Vec3> points, std::span<double> out)
         }
         case Op::Unite:
           --top;
-          combine(array(top - 1), array(top), n, Ops::unite);
+          combine(array(top - 1), array(top), n, unite);
           break;
         case Op::Intersect:
           --top;
-          combine(array(top - 1), array(top), n, Ops::intersect);
+          combine(array(top - 1), array(top), n, intersect);
           break;
       }
     }
@@ -203,10 +206,24 @@ void TreeProgram::values(std::span<const Vec3> points, std::span<double> out,
   }
   switch (ops) {
     case SetOperationKind::MinMax:
-      return runValues<MinMaxValues>(points, out);
+      return runValues(points, out, MinMaxValues{});
     case SetOperationKind::RFunction:
-      return runValues<RFunctionValues>(points, out);
+      return runValues(points, out, RFunctionValues{});
+    case SetOperationKind::Sardf:
+      break;
   }
+  throw std::invalid_argument("values: SARDF needs a radius (pass its SardfOperations)");
+}
+
+void TreeProgram::values(std::span<const Vec3> points, std::span<double> out,
+                         const SetOperations& ops) const {
+  if (ops.kind() != SetOperationKind::Sardf) return values(points, out, ops.kind());
+  const auto* sardf = dynamic_cast<const SardfOperations*>(&ops);
+  if (!sardf) throw std::invalid_argument("values: a SARDF kind must be a SardfOperations");
+  if (points.size() != out.size()) {
+    throw std::invalid_argument("values: points and out differ in size");
+  }
+  runValues(points, out, sardf->values());
 }
 
 TreeProgram TreeProgram::restricted(const Aabb& region, double threshold) const {

@@ -30,9 +30,16 @@ class TreeProgram {
   /// Value and gradient at p with min/max.
   FieldValue evaluate(const Vec3& p) const;
   /// out[i] = value at points[i] with the set operations `ops`.
-  /// @throw std::invalid_argument when the spans differ in size.
+  /// @throw std::invalid_argument when the spans differ in size, or for
+  ///        SetOperationKind::Sardf (which needs a radius: pass the
+  ///        SardfOperations object to the overload below).
   void values(std::span<const Vec3> points, std::span<double> out,
               SetOperationKind ops = SetOperationKind::MinMax) const;
+  /// out[i] = value at points[i] with the set operations `ops` (bit for bit
+  /// CsgTree::value(points[i], ops)); SardfOperations with its radius.
+  /// @throw std::invalid_argument when the spans differ in size, or `ops` is
+  ///        of kind Sardf without being a SardfOperations.
+  void values(std::span<const Vec3> points, std::span<double> out, const SetOperations& ops) const;
 
   /// A program for the points of `region` (min/max only), for a threshold
   /// T = `threshold`: at every point of the region where this program's
@@ -67,7 +74,7 @@ class TreeProgram {
   void compile(const Node& node, Leaves& leaves);
   static std::size_t depthOf(const std::vector<Step>& steps);
   template <class Ops>
-  void runValues(std::span<const Vec3> points, std::span<double> out) const;
+  void runValues(std::span<const Vec3> points, std::span<double> out, const Ops& ops) const;
 
   std::shared_ptr<const Leaves> leaves_;
   std::vector<Step> steps_;

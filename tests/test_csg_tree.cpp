@@ -479,17 +479,22 @@ TEST(TreeEvaluation, ValueIsBitForBitTheEvaluatedValueOnTheBundledTrees) {
   for (const std::string& part : test::partNames()) {
     const CsgTree tree = readTreeJson(test::dataDir() / part / "tree.json");
     const std::vector<Vec3> points = probePoints(tree, rng, 20000);
-    for (const SetOperationKind kind : {SetOperationKind::MinMax, SetOperationKind::RFunction}) {
-      const SetOperations& ops = setOperations(kind);
-      std::vector<double> batched(points.size());
-      tree.values(points, batched, kind);
+    const SardfOperations sardf(sardfRadius(tree.bounds().diagonal()));
+    for (const SetOperations* opsPtr :
+         {&minMaxOperations(), &rFunctionOperations(), static_cast<const SetOperations*>(&sardf)}) {
+      const SetOperations& ops = *opsPtr;
+      std::vector<double> batched(points.size()), batchedByObject(points.size());
+      if (ops.kind() != SetOperationKind::Sardf) tree.values(points, batched, ops.kind());
+      tree.values(points, batchedByObject, ops);
+      if (ops.kind() == SetOperationKind::Sardf) batched = batchedByObject;
       const TreeProgram program(tree);
       std::size_t mismatches = 0;
       for (std::size_t i = 0; i < points.size(); ++i) {
         const double reference = tree.evaluate(points[i], ops).f;  // the gradient path
         mismatches += tree.value(points[i], ops) != reference;
         mismatches += batched[i] != reference;
-        if (kind == SetOperationKind::MinMax) {
+        mismatches += batchedByObject[i] != reference;
+        if (ops.kind() == SetOperationKind::MinMax) {
           mismatches += program.value(points[i]) != reference;
           const FieldValue v = program.evaluate(points[i]);
           const FieldValue w = tree.evaluate(points[i]);
