@@ -70,8 +70,8 @@ std::string percent(const nlohmann::ordered_json& v) {
 }
 
 void printTable(const nlohmann::ordered_json& rows) {
-  std::printf("%-10s %8s %8s %6s %5s %6s %10s %9s %9s %12s\n", "method", "wall s", "CPU s",
-              "prims", "ops", "depth", "Chamfer%D", "RMSE%D", "voxelIoU", "fitness");
+  std::printf("%-10s %8s %8s %6s %5s %6s %10s %9s %9s %12s\n", "method", "wall s", "CPU s", "prims",
+              "ops", "depth", "Chamfer%D", "RMSE%D", "voxelIoU", "fitness");
   for (const auto& r : rows) {
     std::printf("%-10s %8.2f %8.2f %6d %5d %6d %10s %9s %9.4f %12.1f\n",
                 r["method"].get<std::string>().c_str(), r["wall_s"].get<double>(),
@@ -134,9 +134,8 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, fo, {}, console.progress());
     if (!found.ok()) throw ParseError(scanPath.string() + ": " + found.detection.message);
     const double detectSeconds = watch.seconds();
-    console.info("detection: " + std::to_string(found.detection.surfaces.size()) +
-                 " surfaces, " + std::to_string(found.hypotheses.candidates.size()) +
-                 " candidates");
+    console.info("detection: " + std::to_string(found.detection.surfaces.size()) + " surfaces, " +
+                 std::to_string(found.hypotheses.candidates.size()) + " candidates");
 
     nlohmann::ordered_json rows = nlohmann::ordered_json::array();
     VoxelLabels labels;

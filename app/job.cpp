@@ -66,9 +66,10 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
   app.add_option("--max-depth", gp.evolve.variation.maxDepth, "gp: deepest tree (levels)")
       ->check(inRange(2, 1000));
   app.add_option("--operations", s.operations,
-                 "gp: field of the set operations in the fitness: minmax (as published) or "
-                 "rfunction (the solid is the same)")
-      ->check(CLI::IsMember({"minmax", "rfunction"}));
+                 "gp: field of the set operations in the fitness: minmax (as published), "
+                 "rfunction or sardf (the solid is the same; the field, its gradients and so the "
+                 "normal term differ near edges)")
+      ->check(CLI::IsMember({"minmax", "rfunction", "sardf"}));
   app.add_option("--angle", gp.fitness.angleTolerance,
                  "gp: normal tolerance alpha of Eq. 7, degrees (about 35 for noisy scans)")
       ->check(inRange(0.1, 180.0));
@@ -94,8 +95,9 @@ ReconstructOptions pipelineOptions(const JobSettings& s) {
   o.method = methodFromName(s.method);
   o.labels.method = labelMethodFromName(s.labelMethod);
   o.labels.boundary = s.boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
-  o.gp.fitness.operations =
-      s.operations == "rfunction" ? SetOperationKind::RFunction : SetOperationKind::MinMax;
+  o.gp.fitness.operations = s.operations == "rfunction" ? SetOperationKind::RFunction
+                            : s.operations == "sardf"   ? SetOperationKind::Sardf
+                                                        : SetOperationKind::MinMax;
   return o;
 }
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/sardf.h"
+
 namespace csgvox::fitness_detail {
 namespace {
 
@@ -190,6 +192,18 @@ struct RFunctionPartials {
   }
 };
 
+struct SardfPartials {
+  double radius;
+  Partials unite(double a, double b) const {
+    const SardfResult r = sardfUnite(a, b, radius);
+    return {r.f, r.d1, r.d2};
+  }
+  Partials intersect(double a, double b) const {
+    const SardfResult r = sardfIntersect(a, b, radius);
+    return {r.f, r.d1, r.d2};
+  }
+};
+
 struct SmoothStack {
   std::vector<float> f, gx, gy, gz;
   std::vector<std::int32_t> ids;  // as min/max; −1 where the operands blend
@@ -337,6 +351,8 @@ TermSums pointTerms(const Program& program, const PointTables& tables, SetOperat
       return minMaxTerms(fused(program), tables);
     case SetOperationKind::RFunction:
       return smoothTerms(program, tables, RFunctionPartials{});
+    case SetOperationKind::Sardf:
+      return smoothTerms(program, tables, SardfPartials{tables.radius});
   }
   throw std::invalid_argument("unknown set operations");
 }

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/csg_tree.h"
+#include "core/sardf.h"
 #include "core/set_operations.h"
 #include "evolve/primitive_library.h"
 #include "voxel/voxel_grid.h"
@@ -33,8 +34,8 @@ struct FitnessOptions {
   double angleTolerance = 10.0;     ///< α, degrees (about 35 suits noisy scans)
   double sizeWeight = -1.0;         ///< λ per tree node; < 0: ln N (N = points evaluated)
   SetOperationKind operations = SetOperationKind::MinMax;  ///< field of the set operations
-  double sardfRadius = 0.05;  ///< SARDF: blending radius R, fraction of D
-  double voxelWeight = 0.0;   ///< w of the voxel term (0: off; needs voxel labels)
+  double sardfRadius = kSardfRadiusFraction;  ///< SARDF: blending radius R, fraction of D
+  double voxelWeight = 0.0;                   ///< w of the voxel term (0: off; needs voxel labels)
 };
 
 /// The voxel labels the volumetric term compares a tree's solid with.

@@ -102,6 +102,31 @@ TEST(Fitness, RFunctionsMatchDirectComputation) {
   }
 }
 
+TEST(Fitness, SardfMatchesDirectComputation) {
+  const test::OrientedPoints in = noisyCube(8);
+  const PrimitiveLibrary library = test::cubePlanes(
+      {Sphere{Vec3(0.5, 0.5, 0.5), 0.8}, Cylinder{Vec3::Zero(), Vec3::UnitY(), 0.5, 3}});
+  FitnessOptions options;
+  options.operations = SetOperationKind::Sardf;
+  options.sardfRadius = 0.1;
+  const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
+  const SardfOperations ops(0.1 * kDiagonal);
+  EvolveRng rng(13);
+  for (int t = 0; t < 20; ++t) {
+    const CsgTree tree = randomTree(rng, library, 4, 0.9);
+    const auto [distance, normal] =
+        directTerms(tree, in, 0.01 * kDiagonal, 10.0 * std::numbers::pi / 180.0, ops);
+    const Fitness f = model.evaluate(tree);
+    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
+    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
+  }
+  // The solid is min/max's: the exact cube scores every point on its faces.
+  const test::OrientedPoints faces = test::cubeFacePoints(10);
+  const FitnessModel onFaces(faces.points, faces.normals, kDiagonal, library, options);
+  EXPECT_NEAR(onFaces.evaluate(test::cubeTree(library)).distanceTerm, double(faces.points.size()),
+              1e-6);
+}
+
 TEST(Fitness, VoxelTermCountsDisagreeingVoxelCentres) {
   const test::OrientedPoints in = test::cubeFacePoints(8);
   const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(1, 1, 1), 1.2}});
