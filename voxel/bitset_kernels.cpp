@@ -1,4 +1,5 @@
-// The portable bitset kernels and the choice of a level's kernels.
+// The portable bitset kernels (one word at a time) and the choice of a
+// level's kernels.
 
 #include "voxel/bitset_kernels.h"
 
@@ -6,49 +7,35 @@
 #include <array>
 #include <bit>
 
+#include "voxel/bitset_kernel_loops.h"
+
 namespace csgvox {
 namespace {
 
 using Word = std::uint64_t;
 
-struct And {
-  static Word apply(Word x, Word y) { return x & y; }
+// The primitives of bitset_kernel_loops.h for one word.
+struct Portable {
+  using Vec = Word;
+  using Counts = std::size_t;
+  using Sum = std::size_t;
+  static constexpr std::size_t kLanes = 1;
+  static constexpr std::size_t kStepsPerFold = ~std::size_t(0);
+
+  static Vec load(const Word* p) { return *p; }
+  static void store(Word* p, Vec v) { *p = v; }
+  static Vec bitAnd(Vec x, Vec y) { return x & y; }
+  static Vec bitAndNot(Vec x, Vec y) { return x & ~y; }
+  static Vec bitOr(Vec x, Vec y) { return x | y; }
+  static bool any(Vec v) { return v != 0; }
+  static Counts zeroCounts() { return 0; }
+  static Counts countBits(Counts c, Vec v) { return c + std::size_t(std::popcount(v)); }
+  static Sum zeroSum() { return 0; }
+  static Sum widen(Sum s, Counts c) { return s + c; }
+  static std::size_t total(Sum s) { return s; }
 };
-struct AndNot {
-  static Word apply(Word x, Word y) { return x & ~y; }
-};
-struct Or {
-  static Word apply(Word x, Word y) { return x | y; }
-};
 
-template <class Op>
-std::size_t countOp(const Word* a, const Word* b, std::size_t n) {
-  std::size_t c = 0;
-  for (std::size_t i = 0; i < n; ++i) c += std::size_t(std::popcount(Op::apply(a[i], b[i])));
-  return c;
-}
-
-template <class Op>
-void applyOp(Word* a, const Word* b, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) a[i] = Op::apply(a[i], b[i]);
-}
-
-std::size_t count(const Word* a, std::size_t n) {
-  std::size_t c = 0;
-  for (std::size_t i = 0; i < n; ++i) c += std::size_t(std::popcount(a[i]));
-  return c;
-}
-
-bool intersects(const Word* a, const Word* b, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) {
-    if (a[i] & b[i]) return true;
-  }
-  return false;
-}
-
-constinit const BitsetKernels kPortable{countOp<And>, countOp<AndNot>, countOp<Or>,
-                                        count,        intersects,      applyOp<And>,
-                                        applyOp<Or>,  applyOp<AndNot>};
+constinit const BitsetKernels kPortable = bitset_loops::bitsetKernelsOf<Portable>();
 
 }  // namespace
 
