@@ -107,6 +107,8 @@ int main(int argc, char** argv) {
   addSizes(benchmark::RegisterBenchmark("Memcpy", memcpySet));
   benchmark::AddCustomContext("simd_detected",
                               std::string(csgvox::simdLevelName(csgvox::detectedSimdLevel())));
+  benchmark::AddCustomContext("simd_default",
+                              std::string(csgvox::simdLevelName(csgvox::simdLevel())));
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
 }

@@ -37,13 +37,9 @@ struct Portable {
 
 constinit const BitsetKernels kPortable = bitset_loops::bitsetKernelsOf<Portable>();
 
-}  // namespace
-
-const BitsetKernels* portableBitsetKernels() { return &kPortable; }
-
-const BitsetKernels& bitsetKernels(SimdLevel level) {
-  // Index: the level; each entry the highest level ≤ it that the CPU
-  // supports and the build has.
+// Index: the level; each entry the kernels of the highest level ≤ it that
+// the CPU supports and the build has.
+const std::array<const BitsetKernels*, 3>& kernelsByLevel() {
   static const auto table = [] {
     const SimdLevel cpu = detectedSimdLevel();
     const BitsetKernels* avx2 = cpu >= SimdLevel::Avx2 ? avx2BitsetKernels() : nullptr;
@@ -51,7 +47,19 @@ const BitsetKernels& bitsetKernels(SimdLevel level) {
     const BitsetKernels* upToAvx2 = avx2 ? avx2 : &kPortable;
     return std::array<const BitsetKernels*, 3>{&kPortable, upToAvx2, avx512 ? avx512 : upToAvx2};
   }();
+  return table;
+}
+
+}  // namespace
+
+const BitsetKernels* portableBitsetKernels() { return &kPortable; }
+
+const BitsetKernels& bitsetKernels(SimdLevel level) {
+  const auto& table = kernelsByLevel();
   return *table[std::size_t(std::clamp(int(level), 0, int(table.size()) - 1))];
 }
+
+// simdLevel() is never outside [Portable, Avx512].
+const BitsetKernels& activeBitsetKernels() { return *kernelsByLevel()[std::size_t(simdLevel())]; }
 
 }  // namespace csgvox

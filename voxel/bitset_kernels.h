@@ -44,8 +44,10 @@ const BitsetKernels* avx2BitsetKernels();
 const BitsetKernels* avx512BitsetKernels();
 
 /// The kernels of `level`, capped to detectedSimdLevel() and to the levels
-/// the build has, so any level is safe to ask for. VoxelSet uses
-/// bitsetKernels(simdLevel()).
+/// the build has, so any level is safe to ask for.
 const BitsetKernels& bitsetKernels(SimdLevel level);
+
+/// bitsetKernels(simdLevel()): the kernels VoxelSet uses, chosen per call.
+const BitsetKernels& activeBitsetKernels();
 
 }  // namespace csgvox

@@ -6,13 +6,10 @@
 
 #include "voxel/bitset_kernels.h"
 
+// The word-wise operations run on activeBitsetKernels(): the kernels of the
+// instruction-set level in use, chosen per call (core/cpu_features.h).
+
 namespace csgvox {
-namespace {
-
-// The kernels of the level in use, chosen per call (see core/cpu_features.h).
-const BitsetKernels& kernels() { return bitsetKernels(simdLevel()); }
-
-}  // namespace
 
 void VoxelSet::fill() {
   std::fill(words_.begin(), words_.end(), ~std::uint64_t(0));
@@ -27,7 +24,9 @@ void VoxelSet::clearPadding() {
   }
 }
 
-std::size_t VoxelSet::count() const { return kernels().count(words_.data(), words_.size()); }
+std::size_t VoxelSet::count() const {
+  return activeBitsetKernels().count(words_.data(), words_.size());
+}
 
 bool VoxelSet::none() const {
   return std::all_of(words_.begin(), words_.end(), [](std::uint64_t w) { return w == 0; });
@@ -35,19 +34,19 @@ bool VoxelSet::none() const {
 
 VoxelSet& VoxelSet::operator&=(const VoxelSet& other) {
   assert(bits_ == other.bits_);
-  kernels().andInPlace(words_.data(), other.words_.data(), words_.size());
+  activeBitsetKernels().andInPlace(words_.data(), other.words_.data(), words_.size());
   return *this;
 }
 
 VoxelSet& VoxelSet::operator|=(const VoxelSet& other) {
   assert(bits_ == other.bits_);
-  kernels().orInPlace(words_.data(), other.words_.data(), words_.size());
+  activeBitsetKernels().orInPlace(words_.data(), other.words_.data(), words_.size());
   return *this;
 }
 
 VoxelSet& VoxelSet::subtract(const VoxelSet& other) {
   assert(bits_ == other.bits_);
-  kernels().andNotInPlace(words_.data(), other.words_.data(), words_.size());
+  activeBitsetKernels().andNotInPlace(words_.data(), other.words_.data(), words_.size());
   return *this;
 }
 
@@ -79,22 +78,22 @@ VoxelSet VoxelSet::complemented() const {
 
 std::size_t VoxelSet::countAnd(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  return kernels().countAnd(a.words_.data(), b.words_.data(), a.words_.size());
+  return activeBitsetKernels().countAnd(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 std::size_t VoxelSet::countAndNot(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  return kernels().countAndNot(a.words_.data(), b.words_.data(), a.words_.size());
+  return activeBitsetKernels().countAndNot(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 std::size_t VoxelSet::countOr(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  return kernels().countOr(a.words_.data(), b.words_.data(), a.words_.size());
+  return activeBitsetKernels().countOr(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 bool VoxelSet::intersects(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  return kernels().intersects(a.words_.data(), b.words_.data(), a.words_.size());
+  return activeBitsetKernels().intersects(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 }  // namespace csgvox
