@@ -9,18 +9,26 @@
 ///    others each in their own .cpp compiled with the level's flags
 ///    (`csgvox_simd_sources(AVX2 file.cpp)` / `csgvox_simd_sources(AVX512
 ///    file.cpp)` from cmake/csgvox_simd.cmake);
-///  - an ISA-specific file holds only intrinsics and plain loops with internal
-///    linkage (anonymous namespace) and exports one function returning its
-///    kernels; it calls no inline library function or template (std::popcount,
-///    std::min, containers), because the linker may keep that file's copy of
-///    such a function for the whole program, and then AVX code would run on a
-///    CPU without AVX. Its body sits under `#if defined(__AVX2__)` (or
+///  - an ISA-specific file holds only intrinsics and code with internal
+///    linkage (anonymous namespace; templates instantiated with a type of the
+///    anonymous namespace count, as in voxel/bitset_kernel_loops.h) and
+///    exports one function returning a constant table of its kernels. It calls
+///    no inline function or template of a library or of another header
+///    (std::popcount, std::min, containers), because
+///    the linker may keep that file's copy of such a function for the whole
+///    program, and then AVX code would run on a CPU without AVX; and it has no
+///    dynamic initialisation (`constinit` tables), which would run at start-up
+///    before any check. Its body sits under `#if defined(__AVX2__)` (or
 ///    `__AVX512F__`), and its export returns nullptr when the file was built
 ///    without the flags (other compilers or processors);
 ///  - each call picks the implementation of `simdLevel()` (a switch or a table
 ///    indexed by the level), falling back to the next lower level built.
 /// Every implementation of a kernel must give the same results bit for bit,
-/// so the level changes speed, never output.
+/// so the level changes speed, never output. For floating-point kernels that
+/// means the same operations in the same order in every lane: no FMA unless
+/// the portable code uses std::fma too (the build's ISO C++ mode keeps GCC
+/// from contracting a * b + c by itself), and no reordered reductions.
+/// Check a new ISA file with `nm -C file.o`: one global symbol, no weak ones.
 
 #include <optional>
 #include <string_view>
