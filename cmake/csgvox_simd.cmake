@@ -11,7 +11,9 @@
 # empty and the portable kernels are used.
 include_guard(GLOBAL)
 
-set(CSGVOX_SIMD_AVX2_OPTIONS -mavx2 -mfma -mbmi -mbmi2 -mpopcnt)
+# -ffp-contract=off: with FMA available GCC would otherwise fuse a * b + c on
+# its own, and floating-point kernels would round differently per level.
+set(CSGVOX_SIMD_AVX2_OPTIONS -mavx2 -mfma -mbmi -mbmi2 -mpopcnt -ffp-contract=off)
 set(CSGVOX_SIMD_AVX512_OPTIONS ${CSGVOX_SIMD_AVX2_OPTIONS} -mavx512f -mavx512bw -mavx512dq
     -mavx512vl -mavx512cd -mavx512vpopcntdq)
 

@@ -26,8 +26,9 @@
 /// Every implementation of a kernel must give the same results bit for bit,
 /// so the level changes speed, never output. For floating-point kernels that
 /// means the same operations in the same order in every lane: no FMA unless
-/// the portable code uses std::fma too (the build's ISO C++ mode keeps GCC
-/// from contracting a * b + c by itself), and no reordered reductions.
+/// the portable code uses std::fma too (the level flags include
+/// -ffp-contract=off, so the compiler does not fuse a * b + c by itself), and
+/// no reordered reductions.
 /// Check a new ISA file with `nm -C file.o`: one global symbol, no weak ones.
 
 #include <optional>
