@@ -4,6 +4,11 @@
 #include <bit>
 #include <cassert>
 
+#include "voxel/bitset_kernels.h"
+
+// The word-wise operations run on activeBitsetKernels(): the kernels of the
+// instruction-set level in use, chosen per call (core/cpu_features.h).
+
 namespace csgvox {
 
 void VoxelSet::fill() {
@@ -20,9 +25,7 @@ void VoxelSet::clearPadding() {
 }
 
 std::size_t VoxelSet::count() const {
-  std::size_t n = 0;
-  for (std::uint64_t w : words_) n += std::size_t(std::popcount(w));
-  return n;
+  return activeBitsetKernels().count(words_.data(), words_.size());
 }
 
 bool VoxelSet::none() const {
@@ -31,28 +34,19 @@ bool VoxelSet::none() const {
 
 VoxelSet& VoxelSet::operator&=(const VoxelSet& other) {
   assert(bits_ == other.bits_);
-  const std::size_t n = words_.size();
-  std::uint64_t* __restrict a = words_.data();
-  const std::uint64_t* __restrict b = other.words_.data();
-  for (std::size_t i = 0; i < n; ++i) a[i] &= b[i];
+  activeBitsetKernels().andInPlace(words_.data(), other.words_.data(), words_.size());
   return *this;
 }
 
 VoxelSet& VoxelSet::operator|=(const VoxelSet& other) {
   assert(bits_ == other.bits_);
-  const std::size_t n = words_.size();
-  std::uint64_t* __restrict a = words_.data();
-  const std::uint64_t* __restrict b = other.words_.data();
-  for (std::size_t i = 0; i < n; ++i) a[i] |= b[i];
+  activeBitsetKernels().orInPlace(words_.data(), other.words_.data(), words_.size());
   return *this;
 }
 
 VoxelSet& VoxelSet::subtract(const VoxelSet& other) {
   assert(bits_ == other.bits_);
-  const std::size_t n = words_.size();
-  std::uint64_t* __restrict a = words_.data();
-  const std::uint64_t* __restrict b = other.words_.data();
-  for (std::size_t i = 0; i < n; ++i) a[i] &= ~b[i];
+  activeBitsetKernels().andNotInPlace(words_.data(), other.words_.data(), words_.size());
   return *this;
 }
 
@@ -84,41 +78,22 @@ VoxelSet VoxelSet::complemented() const {
 
 std::size_t VoxelSet::countAnd(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  const std::size_t n = a.words_.size();
-  const std::uint64_t* __restrict x = a.words_.data();
-  const std::uint64_t* __restrict y = b.words_.data();
-  std::size_t c = 0;
-  for (std::size_t i = 0; i < n; ++i) c += std::size_t(std::popcount(x[i] & y[i]));
-  return c;
+  return activeBitsetKernels().countAnd(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 std::size_t VoxelSet::countAndNot(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  const std::size_t n = a.words_.size();
-  const std::uint64_t* __restrict x = a.words_.data();
-  const std::uint64_t* __restrict y = b.words_.data();
-  std::size_t c = 0;
-  for (std::size_t i = 0; i < n; ++i) c += std::size_t(std::popcount(x[i] & ~y[i]));
-  return c;
+  return activeBitsetKernels().countAndNot(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 std::size_t VoxelSet::countOr(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  const std::size_t n = a.words_.size();
-  const std::uint64_t* __restrict x = a.words_.data();
-  const std::uint64_t* __restrict y = b.words_.data();
-  std::size_t c = 0;
-  for (std::size_t i = 0; i < n; ++i) c += std::size_t(std::popcount(x[i] | y[i]));
-  return c;
+  return activeBitsetKernels().countOr(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 bool VoxelSet::intersects(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
-  const std::size_t n = a.words_.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (a.words_[i] & b.words_[i]) return true;
-  }
-  return false;
+  return activeBitsetKernels().intersects(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
 }  // namespace csgvox

@@ -1,8 +1,10 @@
 #pragma once
 /// A set of voxels as a bitset: one bit per voxel of a VoxelGrid, packed in
 /// 64-bit words. Set algebra is word-wise (AND, OR, AND-NOT) and sizes are
-/// popcounts, so a 64³ set (4096 words) is combined and counted in a few
-/// microseconds. The hot loops are written for the compiler to vectorise.
+/// popcounts, so a 64³ set (4096 words) is combined and counted in well under
+/// a microsecond. The word-wise kernels use AVX2 or AVX-512 where the CPU has
+/// them (voxel/bitset_kernels.h, chosen per call by simdLevel() of
+/// core/cpu_features.h); every level gives the same results.
 
 #include <cstddef>
 #include <cstdint>

@@ -1,0 +1,65 @@
+// The portable bitset kernels (one word at a time) and the choice of a
+// level's kernels.
+
+#include "voxel/bitset_kernels.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+
+#include "voxel/bitset_kernel_loops.h"
+
+namespace csgvox {
+namespace {
+
+using Word = std::uint64_t;
+
+// The primitives of bitset_kernel_loops.h for one word.
+struct Portable {
+  using Vec = Word;
+  using Counts = std::size_t;
+  using Sum = std::size_t;
+  static constexpr std::size_t kLanes = 1;
+  static constexpr std::size_t kStepsPerFold = ~std::size_t(0);
+
+  static Vec load(const Word* p) { return *p; }
+  static void store(Word* p, Vec v) { *p = v; }
+  static Vec bitAnd(Vec x, Vec y) { return x & y; }
+  static Vec bitAndNot(Vec x, Vec y) { return x & ~y; }
+  static Vec bitOr(Vec x, Vec y) { return x | y; }
+  static bool any(Vec v) { return v != 0; }
+  static Counts zeroCounts() { return 0; }
+  static Counts countBits(Counts c, Vec v) { return c + std::size_t(std::popcount(v)); }
+  static Sum zeroSum() { return 0; }
+  static Sum widen(Sum s, Counts c) { return s + c; }
+  static std::size_t total(Sum s) { return s; }
+};
+
+constinit const BitsetKernels kPortable = bitset_loops::bitsetKernelsOf<Portable>();
+
+// Index: the level; each entry the kernels of the highest level ≤ it that
+// the CPU supports and the build has.
+const std::array<const BitsetKernels*, 3>& kernelsByLevel() {
+  static const auto table = [] {
+    const SimdLevel cpu = detectedSimdLevel();
+    const BitsetKernels* avx2 = cpu >= SimdLevel::Avx2 ? avx2BitsetKernels() : nullptr;
+    const BitsetKernels* avx512 = cpu >= SimdLevel::Avx512 ? avx512BitsetKernels() : nullptr;
+    const BitsetKernels* upToAvx2 = avx2 ? avx2 : &kPortable;
+    return std::array<const BitsetKernels*, 3>{&kPortable, upToAvx2, avx512 ? avx512 : upToAvx2};
+  }();
+  return table;
+}
+
+}  // namespace
+
+const BitsetKernels* portableBitsetKernels() { return &kPortable; }
+
+const BitsetKernels& bitsetKernels(SimdLevel level) {
+  const auto& table = kernelsByLevel();
+  return *table[std::size_t(std::clamp(int(level), 0, int(table.size()) - 1))];
+}
+
+// simdLevel() is never outside [Portable, Avx512].
+const BitsetKernels& activeBitsetKernels() { return *kernelsByLevel()[std::size_t(simdLevel())]; }
+
+}  // namespace csgvox
