@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/cpu_features.h"
 #include "evolve/fitness.h"
 #include "evolve/genetic_search.h"
 #include "evolve/tree_variation.h"
@@ -115,6 +116,8 @@ void generationTime(std::size_t n, int threads, bool quick) {
 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  std::printf("instruction set: %s (CSGVOX_SIMD=portable|avx2|avx512 chooses)\n\n",
+              std::string(simdLevelName(simdLevel())).c_str());
   std::printf("Fitness of 150 random trees (10 primitives, depth <= 5)\n\n");
   std::printf("| operations | points | mean nodes | us per tree | points x nodes per s |\n");
   std::printf("| --- | ---: | ---: | ---: | ---: |\n");

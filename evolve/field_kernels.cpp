@@ -5,7 +5,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/cpu_features.h"
 #include "core/sardf.h"
+#include "evolve/minmax_chunk.h"
 
 namespace csgvox::fitness_detail {
 namespace {
@@ -58,122 +60,53 @@ void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>&
 
 // ---- min/max: the field at a point is one leaf's ±field; carry its id ----
 
-struct MinMaxStack {
+MinMaxChunkKernel minMaxKernel() {
+  switch (simdLevel()) {
+    case SimdLevel::Avx512:
+      return minMaxChunkAvx512;
+    case SimdLevel::Avx2:
+      return minMaxChunkAvx2;
+    default:
+      return minMaxChunkPortable;
+  }
+}
+
+struct MinMaxScratch {
   std::vector<float> values;
-  std::vector<std::int32_t> ids;  // 2·leaf + (1 when negated)
+  std::vector<std::int32_t> ids;
+  std::vector<std::uint8_t> ops;
+  std::vector<std::uint16_t> leaves;
 };
 
-// a = op(a, b) with the id of the operand taken; branch-free so that it
-// vectorises (ties keep a, as std::min and std::max do).
-template <bool kMin>
-void select(float* __restrict va, std::int32_t* __restrict ia, const float* __restrict vb,
-            const std::int32_t* __restrict ib, std::size_t m) {
-  for (std::size_t i = 0; i < m; ++i) {
-    const float a = va[i], b = vb[i];
-    const std::int32_t takeB = -std::int32_t(kMin ? b < a : b > a);
-    va[i] = kMin ? std::min(a, b) : std::max(a, b);
-    ia[i] = (ia[i] & ~takeB) | (ib[i] & takeB);
-  }
-}
-
-// The same with a leaf's (negated) field as the second operand.
-template <bool kMin, bool kNeg>
-void selectLeaf(float* __restrict va, std::int32_t* __restrict ia, const float* __restrict src,
-                std::int32_t code, std::size_t m) {
-  for (std::size_t i = 0; i < m; ++i) {
-    const float a = va[i], b = kNeg ? -src[i] : src[i];
-    const std::int32_t takeB = -std::int32_t(kMin ? b < a : b > a);
-    va[i] = kMin ? std::min(a, b) : std::max(a, b);
-    ia[i] = (ia[i] & ~takeB) | (code & takeB);
-  }
-}
-
 TermSums minMaxTerms(const Program& program, const PointTables& t) {
-  thread_local MinMaxStack stack;
+  thread_local MinMaxScratch scratch;
   const std::size_t need = program.stackDepth * kChunk;
-  if (stack.values.size() < need) {
-    stack.values.resize(need);
-    stack.ids.resize(need);
+  if (scratch.values.size() < need) {
+    scratch.values.resize(need);
+    scratch.ids.resize(need);
   }
-  TermSums sums;
+  scratch.ops.clear();
+  scratch.leaves.clear();
+  for (const Instr& ins : program.code) {
+    scratch.ops.push_back(std::uint8_t(ins.op));
+    scratch.leaves.push_back(ins.leaf);
+  }
+  MinMaxChunk k;
+  k.ops = scratch.ops.data();
+  k.leaves = scratch.leaves.data();
+  k.codeSize = scratch.ops.size();
+  k.values = t.values;
+  k.distanceTerm = t.distanceTerm;
+  k.normalTerm = t.normalTerm;
+  k.n = t.n;
+  k.stackValues = scratch.values.data();
+  k.stackIds = scratch.ids.data();
+  const MinMaxChunkKernel kernel = minMaxKernel();
+  double sums[2] = {0.0, 0.0};
   for (std::size_t start = 0; start < t.n; start += kChunk) {
-    const std::size_t m = std::min(kChunk, t.n - start);
-    std::size_t top = 0;  // values on the stack
-    for (const Instr& ins : program.code) {
-      float* v = stack.values.data() + top * kChunk;
-      std::int32_t* id = stack.ids.data() + top * kChunk;
-      switch (ins.op) {
-        case Op::Leaf:
-        case Op::LeafNeg: {
-          const float* src = t.values + std::size_t(ins.leaf) * t.n + start;
-          const bool neg = ins.op == Op::LeafNeg;
-          const std::int32_t code = 2 * std::int32_t(ins.leaf) + (neg ? 1 : 0);
-          if (neg) {
-            for (std::size_t i = 0; i < m; ++i) v[i] = -src[i];
-          } else {
-            std::copy(src, src + m, v);
-          }
-          std::fill(id, id + m, code);
-          ++top;
-          break;
-        }
-        case Op::Negate:
-          v -= kChunk;
-          id -= kChunk;
-          for (std::size_t i = 0; i < m; ++i) {
-            v[i] = -v[i];
-            id[i] ^= 1;
-          }
-          break;
-        case Op::Min:
-        case Op::Max: {
-          float* a = v - 2 * kChunk;
-          std::int32_t* ia = id - 2 * kChunk;
-          if (ins.op == Op::Min) {
-            select<true>(a, ia, v - kChunk, id - kChunk, m);
-          } else {
-            select<false>(a, ia, v - kChunk, id - kChunk, m);
-          }
-          --top;
-          break;
-        }
-        default: {
-          const float* src = t.values + std::size_t(ins.leaf) * t.n + start;
-          const bool neg = ins.op == Op::MinLeafNeg || ins.op == Op::MaxLeafNeg;
-          const std::int32_t code = 2 * std::int32_t(ins.leaf) + (neg ? 1 : 0);
-          float* a = v - kChunk;
-          std::int32_t* ia = id - kChunk;
-          switch (ins.op) {
-            case Op::MinLeaf:
-              selectLeaf<true, false>(a, ia, src, code, m);
-              break;
-            case Op::MinLeafNeg:
-              selectLeaf<true, true>(a, ia, src, code, m);
-              break;
-            case Op::MaxLeaf:
-              selectLeaf<false, false>(a, ia, src, code, m);
-              break;
-            default:
-              selectLeaf<false, true>(a, ia, src, code, m);
-              break;
-          }
-          break;
-        }
-      }
-    }
-    // Four interleaved sums in a fixed order: the same result on every
-    // instruction set, without one long chain of dependent additions.
-    const std::int32_t* id = stack.ids.data();
-    double distance[4] = {0, 0, 0, 0}, normal[4] = {0, 0, 0, 0};
-    for (std::size_t i = 0; i < m; ++i) {
-      const std::size_t leaf = std::size_t(id[i]) >> 1;
-      distance[i & 3] += t.distanceTerm[leaf * t.n + start + i];
-      normal[i & 3] += t.normalTerm[std::size_t(id[i]) * t.n + start + i];
-    }
-    sums.distance += (distance[0] + distance[1]) + (distance[2] + distance[3]);
-    sums.normal += (normal[0] + normal[1]) + (normal[2] + normal[3]);
+    kernel(k, start, std::min(kChunk, t.n - start), sums);
   }
-  return sums;
+  return {sums[0], sums[1]};
 }
 
 // ---- smooth operations: values and gradients blend near the bisector ----

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/cpu_features.h"
 #include "evolve/fitness.h"
 #include "evolve/tree_variation.h"
 #include "evolve_fixtures.h"
@@ -81,6 +82,28 @@ TEST(Fitness, MinMaxMatchesDirectComputationOnRandomTrees) {
     // Tables are floats: terms agree to float rounding.
     EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
     EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
+  }
+}
+
+TEST(Fitness, EveryInstructionSetGivesTheSameSums) {
+  const test::OrientedPoints in = noisyCube(21);  // 864 points: 3 full chunks and a partial one
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(0.3, 0.1, 0.0), 0.7}});
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  EvolveRng rng(17);
+  std::vector<CsgTree> trees;
+  for (int t = 0; t < 30; ++t) trees.push_back(randomTree(rng, library, 6, 0.8));
+  std::vector<Fitness> reference;
+  {
+    const ScopedSimdLevel portable(SimdLevel::Portable);
+    for (const CsgTree& t : trees) reference.push_back(model.evaluate(t));
+  }
+  for (const SimdLevel level : supportedSimdLevels()) {
+    const ScopedSimdLevel scoped(level);
+    for (std::size_t t = 0; t < trees.size(); ++t) {
+      const Fitness f = model.evaluate(trees[t]);
+      EXPECT_EQ(f.distanceTerm, reference[t].distanceTerm) << simdLevelName(level) << " " << t;
+      EXPECT_EQ(f.normalTerm, reference[t].normalTerm) << simdLevelName(level) << " " << t;
+    }
   }
 }
 

@@ -1,0 +1,37 @@
+#pragma once
+/// The min/max fitness kernel over one chunk of points, compiled once per
+/// instruction-set level (portable, AVX2, AVX-512; core/cpu_features.h) and
+/// chosen at run time. Plain data only: the files compiled with wider
+/// instruction sets must not instantiate library templates (see
+/// core/cpu_features.h). Every level gives the same sums bit for bit: the
+/// kernel only selects and negates floats, and sums in a fixed order.
+
+#include <cstddef>
+#include <cstdint>
+
+namespace csgvox::fitness_detail {
+
+/// One chunk's work. `ops` and `leaves` are the program's instructions
+/// (codes of Op) and leaf indices; the stacks hold stackDepth × 256 entries.
+struct MinMaxChunk {
+  const std::uint8_t* ops = nullptr;
+  const std::uint16_t* leaves = nullptr;
+  std::size_t codeSize = 0;
+  const float* values = nullptr;        ///< [p][n]
+  const float* distanceTerm = nullptr;  ///< [p][n]
+  const float* normalTerm = nullptr;    ///< [2p][n]
+  std::size_t n = 0;
+  float* stackValues = nullptr;
+  std::int32_t* stackIds = nullptr;
+};
+
+/// Adds the chunk [start, start + m) (m <= 256) of Σ exp(−di²) and
+/// Σ exp(−θi²) to sums[0] and sums[1].
+using MinMaxChunkKernel = void (*)(const MinMaxChunk& k, std::size_t start, std::size_t m,
+                                   double* sums);
+
+void minMaxChunkPortable(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
+void minMaxChunkAvx2(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
+void minMaxChunkAvx512(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
+
+}  // namespace csgvox::fitness_detail

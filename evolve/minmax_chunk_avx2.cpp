@@ -1,0 +1,6 @@
+// The min/max chunk kernel compiled for avx2 (evolve/minmax_chunk.h); without
+// the instruction set's flags it is the portable kernel under this name.
+#include "evolve/minmax_chunk.h"
+
+#define CSGVOX_MINMAX_CHUNK minMaxChunkAvx2
+#include "evolve/minmax_chunk.inc"
