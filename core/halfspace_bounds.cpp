@@ -50,9 +50,12 @@ Aabb halfSpaceIntersectionBounds(std::span<const HalfSpace> halfSpaces, const Aa
   }
   if (out.isEmpty()) return out;
   constexpr double kInf = std::numeric_limits<double>::infinity();
+  // Vertices carry rounding error: the bounds are widened by a relative
+  // slack so that they stay conservative (a voxel centre on a face counts).
+  const double slack = 1e-9 * scale;
   for (int k = 0; k < 3; ++k) {
-    if (out.max[k] >= 0.5 * far) out.max[k] = kInf;
-    if (out.min[k] <= -0.5 * far) out.min[k] = -kInf;
+    out.max[k] = out.max[k] >= 0.5 * far ? kInf : out.max[k] + slack;
+    out.min[k] = out.min[k] <= -0.5 * far ? -kInf : out.min[k] - slack;
   }
   return out;
 }

@@ -12,7 +12,17 @@
 namespace csgvox::fitness_detail {
 namespace {
 
-constexpr std::size_t kChunk = 256;  // points per batch: the value stack stays in L1
+// The last instruction's value negated: a leaf flips its sign, anything
+// else gets a Negate.
+void negateLast(std::vector<Instr>& code) {
+  if (code.back().op == Op::Leaf) {
+    code.back().op = Op::LeafNeg;
+  } else if (code.back().op == Op::LeafNeg) {
+    code.back().op = Op::Leaf;
+  } else {
+    code.push_back({Op::Negate, 0});
+  }
+}
 
 void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>& code) {
   switch (node.kind) {
@@ -27,13 +37,7 @@ void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>&
     }
     case NodeKind::Complement:
       emit(*node.children.front(), library, code);
-      if (code.back().op == Op::Leaf) {
-        code.back().op = Op::LeafNeg;
-      } else if (code.back().op == Op::LeafNeg) {
-        code.back().op = Op::Leaf;
-      } else {
-        code.push_back({Op::Negate, 0});
-      }
+      negateLast(code);
       return;
     case NodeKind::Union:
     case NodeKind::Intersection:
@@ -42,15 +46,7 @@ void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>&
       emit(*node.children.front(), library, code);
       for (std::size_t k = 1; k < node.children.size(); ++k) {
         emit(*node.children[k], library, code);
-        if (node.kind == NodeKind::Difference) {
-          if (code.back().op == Op::Leaf) {
-            code.back().op = Op::LeafNeg;
-          } else if (code.back().op == Op::LeafNeg) {
-            code.back().op = Op::Leaf;
-          } else {
-            code.push_back({Op::Negate, 0});
-          }
-        }
+        if (node.kind == NodeKind::Difference) negateLast(code);
         code.push_back({op, 0});
       }
       return;
@@ -60,8 +56,10 @@ void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>&
 
 // ---- min/max: the field at a point is one leaf's ±field; carry its id ----
 
-MinMaxChunkKernel minMaxKernel() {
-  switch (simdLevel()) {
+}  // namespace
+
+MinMaxChunkKernel minMaxKernel(SimdLevel level) {
+  switch (level) {
     case SimdLevel::Avx512:
       return minMaxChunkAvx512;
     case SimdLevel::Avx2:
@@ -71,11 +69,11 @@ MinMaxChunkKernel minMaxKernel() {
   }
 }
 
+namespace {
+
 struct MinMaxScratch {
   std::vector<float> values;
   std::vector<std::int32_t> ids;
-  std::vector<std::uint8_t> ops;
-  std::vector<std::uint16_t> leaves;
 };
 
 TermSums minMaxTerms(const Program& program, const PointTables& t) {
@@ -85,23 +83,16 @@ TermSums minMaxTerms(const Program& program, const PointTables& t) {
     scratch.values.resize(need);
     scratch.ids.resize(need);
   }
-  scratch.ops.clear();
-  scratch.leaves.clear();
-  for (const Instr& ins : program.code) {
-    scratch.ops.push_back(std::uint8_t(ins.op));
-    scratch.leaves.push_back(ins.leaf);
-  }
   MinMaxChunk k;
-  k.ops = scratch.ops.data();
-  k.leaves = scratch.leaves.data();
-  k.codeSize = scratch.ops.size();
+  k.code = program.code.data();
+  k.codeSize = program.code.size();
   k.values = t.values;
   k.distanceTerm = t.distanceTerm;
   k.normalTerm = t.normalTerm;
   k.n = t.n;
   k.stackValues = scratch.values.data();
   k.stackIds = scratch.ids.data();
-  const MinMaxChunkKernel kernel = minMaxKernel();
+  const MinMaxChunkKernel kernel = minMaxKernel(simdLevel());
   double sums[2] = {0.0, 0.0};
   for (std::size_t start = 0; start < t.n; start += kChunk) {
     kernel(k, start, std::min(kChunk, t.n - start), sums);

@@ -8,32 +8,13 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/cpu_features.h"
 #include "core/csg_tree.h"
 #include "core/set_operations.h"
+#include "evolve/minmax_chunk.h"
 #include "evolve/primitive_library.h"
 
 namespace csgvox::fitness_detail {
-
-/// Postfix instructions. Leaf pushes a primitive's field, LeafNeg its
-/// negation; Negate negates the top; Min and Max pop two and push one;
-/// MinLeaf, MaxLeaf (and their Neg forms) combine the top with a primitive's
-/// (negated) field in place — a Leaf followed by Min or Max, fused.
-enum class Op : std::uint8_t {
-  Leaf,
-  LeafNeg,
-  Negate,
-  Min,
-  Max,
-  MinLeaf,
-  MinLeafNeg,
-  MaxLeaf,
-  MaxLeafNeg
-};
-
-struct Instr {
-  Op op = Op::Leaf;
-  std::uint16_t leaf = 0;  ///< Leaf, LeafNeg: index into the library
-};
 
 /// A compiled tree.
 struct Program {
@@ -64,6 +45,9 @@ struct TermSums {
   double distance = 0.0;
   double normal = 0.0;
 };
+
+/// The min/max chunk kernel compiled for `level` (capped to none above it).
+MinMaxChunkKernel minMaxKernel(SimdLevel level);
 
 /// The point terms of a program with the given set operations.
 TermSums pointTerms(const Program& program, const PointTables& tables, SetOperationKind ops);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "evolve/field_kernels.h"
+#include "voxel/description_sets.h"
 
 namespace csgvox {
 
@@ -45,23 +46,6 @@ namespace {
 float normalTermOf(double cosAngle, double alpha) {
   const double theta = std::acos(std::clamp(cosAngle, -1.0, 1.0)) / alpha;
   return float(std::exp(-theta * theta));
-}
-
-// Inside set of one primitive over the grid's voxel centres.
-void insideSet(const Primitive& primitive, const VoxelGrid& grid, std::uint64_t* words) {
-  const auto& d = grid.dims();
-  std::vector<Vec3> row(static_cast<std::size_t>(d[0]));
-  std::vector<double> f(row.size());
-  for (int k = 0; k < d[2]; ++k) {
-    for (int j = 0; j < d[1]; ++j) {
-      for (int i = 0; i < d[0]; ++i) row[std::size_t(i)] = grid.center(i, j, k);
-      primitive.values(row, f);
-      const std::size_t base = grid.index(0, j, k);
-      for (std::size_t i = 0; i < row.size(); ++i) {
-        if (f[i] >= 0.0) words[(base + i) >> 6] |= std::uint64_t(1) << ((base + i) & 63);
-      }
-    }
-  }
 }
 
 }  // namespace
@@ -141,9 +125,10 @@ FitnessModel::FitnessModel(std::span<const Vec3> points, std::span<const Vec3> n
     d.lastWordMask = voxels % 64 == 0 ? ~0ull : (std::uint64_t(1) << (voxels % 64)) - 1;
     d.labels.assign(target->inside.words().begin(), target->inside.words().end());
     d.labelCount = target->inside.count();
-    d.insideSets.assign(d.p * d.words, 0);
+    d.insideSets.resize(d.p * d.words);
     tbb::parallel_for(std::size_t(0), d.p, [&](std::size_t q) {
-      insideSet(library.primitive(q), target->grid, d.insideSets.data() + q * d.words);
+      const VoxelSet inside = solidVoxels(library.leafTree(q), target->grid);
+      std::copy(inside.words().begin(), inside.words().end(), d.insideSets.begin() + q * d.words);
     });
   }
   data_ = std::move(data);

@@ -143,7 +143,9 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
   bool roughPhase = rough != nullptr;
   Evaluator evaluator(roughPhase ? rough : &model);
   evaluator.evaluate(population, result.evaluations);
-  double best = population[ranking(population).front()].fitness;
+  // The population's ranking, kept in step with every evaluation.
+  std::vector<std::size_t> order = ranking(population);
+  double best = population[order.front()].fitness;
   std::size_t stall = 0;
   result.stop = EvolveStop::Generations;
 
@@ -154,7 +156,6 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
       result.stop = EvolveStop::TimeLimit;
       break;
     }
-    const std::vector<std::size_t> order = ranking(population);
     next.clear();
     for (std::size_t e = 0; e < options.elites; ++e) next.push_back(population[order[e]]);
     while (next.size() < options.population) {
@@ -174,8 +175,9 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
     }
     population.swap(next);
     evaluator.evaluate(population, result.evaluations);
+    order = ranking(population);
     result.generations = generation;
-    const Creature& leader = population[ranking(population).front()];
+    const Creature& leader = population[order.front()];
     if (leader.fitness > best) {
       best = leader.fitness;
       stall = 0;
@@ -198,15 +200,17 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
       roughPhase = false;
       evaluator.setModel(&model);
       evaluator.evaluate(population, result.evaluations);
-      best = population[ranking(population).front()].fitness;
+      order = ranking(population);
+      best = population[order.front()].fitness;
       stall = 0;
     }
   }
   if (roughPhase) {
     evaluator.setModel(&model);
     evaluator.evaluate(population, result.evaluations);
+    order = ranking(population);
   }
-  const Creature& winner = population[ranking(population).front()];
+  const Creature& winner = population[order.front()];
   result.best = removeRedundancy(winner.tree, model);
   result.fitness = model.evaluate(result.best);
   result.seconds = elapsed();

@@ -11,11 +11,35 @@
 
 namespace csgvox::fitness_detail {
 
-/// One chunk's work. `ops` and `leaves` are the program's instructions
-/// (codes of Op) and leaf indices; the stacks hold stackDepth × 256 entries.
+/// Points per chunk: the value stack of a program stays in L1.
+inline constexpr std::size_t kChunk = 256;
+
+/// Postfix instructions. Leaf pushes a primitive's field, LeafNeg its
+/// negation; Negate negates the top; Min and Max pop two and push one;
+/// MinLeaf, MaxLeaf (and their Neg forms) combine the top with a primitive's
+/// (negated) field in place — a Leaf followed by Min or Max, fused.
+enum class Op : std::uint8_t {
+  Leaf,
+  LeafNeg,
+  Negate,
+  Min,
+  Max,
+  MinLeaf,
+  MinLeafNeg,
+  MaxLeaf,
+  MaxLeafNeg
+};
+
+/// One instruction.
+struct Instr {
+  Op op;
+  std::uint16_t leaf;  ///< the Leaf forms: index into the library
+};
+
+/// One chunk's work: a program (with fused instructions) and its stacks of
+/// stackDepth × kChunk entries.
 struct MinMaxChunk {
-  const std::uint8_t* ops = nullptr;
-  const std::uint16_t* leaves = nullptr;
+  const Instr* code = nullptr;
   std::size_t codeSize = 0;
   const float* values = nullptr;        ///< [p][n]
   const float* distanceTerm = nullptr;  ///< [p][n]
@@ -25,7 +49,7 @@ struct MinMaxChunk {
   std::int32_t* stackIds = nullptr;
 };
 
-/// Adds the chunk [start, start + m) (m <= 256) of Σ exp(−di²) and
+/// Adds the chunk [start, start + m) (m <= kChunk) of Σ exp(−di²) and
 /// Σ exp(−θi²) to sums[0] and sums[1].
 using MinMaxChunkKernel = void (*)(const MinMaxChunk& k, std::size_t start, std::size_t m,
                                    double* sums);

@@ -25,9 +25,11 @@ GpResult runGp(const PointCloud& scan, std::span<const Surface> surfaces, const 
   }
   out.search = evolve(model, {}, options.evolve, onGeneration, rough ? &*rough : nullptr);
   out.tree = out.search.best;
-  if (!out.tree.bounds().isBounded()) {
-    // As the baseline does: the solid is cut to the box around the scan.
-    const Aabb& b = out.primitives.clipBox;
+  const Aabb& b = out.primitives.clipBox;
+  const Aabb bounds = out.tree.bounds();
+  if (!bounds.isEmpty() && !(b.contains(bounds.min) && b.contains(bounds.max))) {
+    // As the baseline does: the solid is cut to the box around the scan, the
+    // region where its clipped cylinders and cones are the unbounded ones.
     const CsgTree box = CsgTree::leaf(Box{b.center(), Mat3::Identity(), 0.5 * b.size()}, "bounds");
     out.tree = CsgTree::intersect({out.tree, box});
     out.clipped = true;

@@ -29,7 +29,8 @@ struct GpResult {
   CsgTree tree;             ///< the best tree, bounded (see `clipped`)
   GpPrimitives primitives;  ///< the library the search combined
   EvolveResult search;      ///< the search's own figures (fitness on all points)
-  bool clipped = false;     ///< the best tree was unbounded and was intersected with the clip box
+  bool clipped = false;     ///< the best tree reached out of the clip box (unbounded, or a long
+                            ///< cylinder or cone) and was intersected with it
 };
 
 /// Runs the baseline on an oriented scan and its fitted surfaces.

@@ -27,9 +27,8 @@ GpPrimitives gpPrimitives(const PointCloud& scan, std::span<const Surface> surfa
   if (scan.points.empty()) throw std::invalid_argument("gpPrimitives: the scan is empty");
   if (surfaces.empty()) throw std::invalid_argument("gpPrimitives: no surfaces");
   GpPrimitives out;
-  Aabb box;
-  for (const Vec3& p : scan.points) box.extend(p);
-  const double diagonal = box.size().norm();
+  Aabb box = scan.bounds();
+  const double diagonal = box.diagonal();
   box.min -= Vec3::Constant(options.clipMargin * diagonal);
   box.max += Vec3::Constant(options.clipMargin * diagonal);
   out.clipBox = box;

@@ -8,7 +8,6 @@
 #include <stdexcept>
 
 #include "core/nearest_neighbors.h"
-#include "core/tree_program.h"
 
 namespace csgvox {
 namespace {
@@ -66,25 +65,6 @@ Method methodFromName(std::string_view name) {
   if (name == "voxel") return Method::Voxel;
   if (name == "gp") return Method::Gp;
   throw std::invalid_argument("unknown method '" + std::string(name) + "' (voxel or gp)");
-}
-
-VoxelSet solidVoxels(const CsgTree& tree, const VoxelGrid& grid) {
-  VoxelSet out(grid.voxelCount());
-  const TreeProgram program(tree);
-  const auto& d = grid.dims();
-  std::vector<Vec3> row(static_cast<std::size_t>(d[0]));
-  std::vector<double> f(row.size());
-  for (int k = 0; k < d[2]; ++k) {
-    for (int j = 0; j < d[1]; ++j) {
-      for (int i = 0; i < d[0]; ++i) row[std::size_t(i)] = grid.center(i, j, k);
-      program.values(row, f);
-      const std::size_t base = grid.index(0, j, k);
-      for (std::size_t i = 0; i < row.size(); ++i) {
-        if (f[i] >= 0.0) out.set(base + i);
-      }
-    }
-  }
-  return out;
 }
 
 namespace {
@@ -171,15 +151,17 @@ Clock::time_point deadlineOf(double timeLimit) {
                          : Clock::time_point::max();
 }
 
-// Everything after detection; `out` holds the detection.
-Reconstruction afterDetection(Reconstruction out, const PointCloud& scan,
-                              const SurfacesAndCandidates& found, const ReconstructOptions& options,
+// Everything after detection, into `out` (which may hold timings already);
+// `found` is taken over.
+Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
+                              const PointCloud& scan, const ReconstructOptions& options,
                               const StageCallback& onStage, const ProgressCallback& progress,
                               Clock::time_point deadline) {
   StageClock clock(out, onStage);
   out.method = options.method;
-  out.grid = found.grid;
-  out.hypotheses = found.hypotheses;
+  out.detection = std::move(found.detection);
+  out.grid = std::move(found.grid);
+  out.hypotheses = std::move(found.hypotheses);
   out.timeLimitHit = Clock::now() > deadline;
   if (options.method == Method::Voxel && options.memoryLimit > 0) {
     const double perVoxel =
@@ -247,14 +229,15 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
         if (progress) progress(fraction, step);
         return !pastDeadline();
       });
-  out.detection = found.detection;
-  if (out.detection.status == DetectionResult::Status::Cancelled) {
+  if (found.detection.status == DetectionResult::Status::Cancelled) {
+    out.detection = std::move(found.detection);
     out.status = Reconstruction::Status::TimedOut;
     out.message = "time limit reached during detection";
     out.timeLimitHit = true;
     return out;
   }
-  if (!out.detection.ok()) {
+  if (!found.ok()) {
+    out.detection = std::move(found.detection);
     out.status = Reconstruction::Status::NoSurfaces;
     out.message = out.detection.message;
     return out;
@@ -262,7 +245,8 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   out.timings.push_back(
       {"detect", found.detectSeconds + found.refineSeconds + found.regularizeSeconds});
   out.timings.push_back({"hypotheses", found.hypothesisSeconds});
-  return afterDetection(std::move(out), scan, found, options, onStage, progress, deadline);
+  return afterDetection(std::move(out), std::move(found), scan, options, onStage, progress,
+                        deadline);
 }
 
 Reconstruction reconstructDetected(const PointCloud& scan, const SurfacesAndCandidates& found,
@@ -271,9 +255,7 @@ Reconstruction reconstructDetected(const PointCloud& scan, const SurfacesAndCand
   if (!found.ok()) throw std::invalid_argument("reconstructDetected: the detection found nothing");
   if (!scan.hasNormals())
     throw std::invalid_argument("reconstructDetected: the scan has no normals");
-  Reconstruction out;
-  out.detection = found.detection;
-  return afterDetection(std::move(out), scan, found, options, onStage, progress,
+  return afterDetection(Reconstruction{}, found, scan, options, onStage, progress,
                         deadlineOf(options.timeLimit));
 }
 

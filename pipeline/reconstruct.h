@@ -38,9 +38,6 @@ std::string_view methodName(Method method);
 /// @throw std::invalid_argument for other names.
 Method methodFromName(std::string_view name);
 
-/// The voxels of `grid` whose centre `tree` holds (value >= 0).
-VoxelSet solidVoxels(const CsgTree& tree, const VoxelGrid& grid);
-
 /// Options of reconstruct().
 struct ReconstructOptions {
   Method method = Method::Voxel;  ///< how the tree is built

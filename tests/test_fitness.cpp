@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/cpu_features.h"
+#include "evolve/field_kernels.h"
 #include "evolve/fitness.h"
 #include "evolve/tree_variation.h"
 #include "evolve_fixtures.h"
@@ -47,6 +48,32 @@ test::OrientedPoints noisyCube(std::uint64_t seed) {
 
 constexpr double kDiagonal = 2.0 * 1.7320508075688772;
 
+// The model's point terms of each tree against directTerms with the model's
+// own tolerances; tables are floats, so they agree to float rounding.
+void expectTermsMatchDirect(const FitnessModel& model, const test::OrientedPoints& in,
+                            const SetOperations& ops, const std::vector<CsgTree>& trees) {
+  const FitnessOptions& o = model.options();
+  const double n = double(in.points.size());
+  for (std::size_t t = 0; t < trees.size(); ++t) {
+    const auto [distance, normal] = directTerms(trees[t], in, o.distanceTolerance * kDiagonal,
+                                                o.angleTolerance * std::numbers::pi / 180.0, ops);
+    const Fitness f = model.evaluate(trees[t]);
+    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * n) << ops.name() << " tree " << t;
+    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * n) << ops.name() << " tree " << t;
+  }
+}
+
+// `count` random trees over the library.
+std::vector<CsgTree> randomTrees(const PrimitiveLibrary& library, std::uint64_t seed, int count,
+                                 std::size_t depth, double operationProbability) {
+  EvolveRng rng(seed);
+  std::vector<CsgTree> trees;
+  for (int t = 0; t < count; ++t) {
+    trees.push_back(randomTree(rng, library, depth, operationProbability));
+  }
+  return trees;
+}
+
 TEST(Fitness, ExactCubeScoresEveryPoint) {
   const test::OrientedPoints in = test::cubeFacePoints(20);
   const PrimitiveLibrary library = test::cubePlanes();
@@ -72,17 +99,9 @@ TEST(Fitness, MinMaxMatchesDirectComputationOnRandomTrees) {
   FitnessOptions options;
   options.angleTolerance = 20.0;
   const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
-  EvolveRng rng(7);
-  for (int t = 0; t < 40; ++t) {
-    CsgTree tree = randomTree(rng, library, 5, 0.8);
-    if (t % 5 == 0) tree = CsgTree::complement(tree);
-    const auto [distance, normal] = directTerms(
-        tree, in, 0.01 * kDiagonal, 20.0 * std::numbers::pi / 180.0, minMaxOperations());
-    const Fitness f = model.evaluate(tree);
-    // Tables are floats: terms agree to float rounding.
-    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
-    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
-  }
+  std::vector<CsgTree> trees = randomTrees(library, 7, 40, 5, 0.8);
+  for (std::size_t t = 0; t < trees.size(); t += 5) trees[t] = CsgTree::complement(trees[t]);
+  expectTermsMatchDirect(model, in, minMaxOperations(), trees);
 }
 
 TEST(Fitness, EveryInstructionSetGivesTheSameSums) {
@@ -99,6 +118,12 @@ TEST(Fitness, EveryInstructionSetGivesTheSameSums) {
   }
   for (const SimdLevel level : supportedSimdLevels()) {
     const ScopedSimdLevel scoped(level);
+    // The level in force picks its own kernel.
+    const fitness_detail::MinMaxChunkKernel own =
+        level == SimdLevel::Avx512 ? fitness_detail::minMaxChunkAvx512
+        : level == SimdLevel::Avx2 ? fitness_detail::minMaxChunkAvx2
+                                   : fitness_detail::minMaxChunkPortable;
+    EXPECT_EQ(fitness_detail::minMaxKernel(simdLevel()), own) << simdLevelName(level);
     for (std::size_t t = 0; t < trees.size(); ++t) {
       const Fitness f = model.evaluate(trees[t]);
       EXPECT_EQ(f.distanceTerm, reference[t].distanceTerm) << simdLevelName(level) << " " << t;
@@ -114,15 +139,7 @@ TEST(Fitness, RFunctionsMatchDirectComputation) {
   options.operations = SetOperationKind::RFunction;
   options.distanceTolerance = 0.05;
   const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
-  EvolveRng rng(11);
-  for (int t = 0; t < 20; ++t) {
-    const CsgTree tree = randomTree(rng, library, 4, 0.9);
-    const auto [distance, normal] = directTerms(
-        tree, in, 0.05 * kDiagonal, 10.0 * std::numbers::pi / 180.0, rFunctionOperations());
-    const Fitness f = model.evaluate(tree);
-    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
-    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
-  }
+  expectTermsMatchDirect(model, in, rFunctionOperations(), randomTrees(library, 11, 20, 4, 0.9));
 }
 
 TEST(Fitness, SardfMatchesDirectComputation) {
@@ -133,16 +150,8 @@ TEST(Fitness, SardfMatchesDirectComputation) {
   options.operations = SetOperationKind::Sardf;
   options.sardfRadius = 0.1;
   const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
-  const SardfOperations ops(0.1 * kDiagonal);
-  EvolveRng rng(13);
-  for (int t = 0; t < 20; ++t) {
-    const CsgTree tree = randomTree(rng, library, 4, 0.9);
-    const auto [distance, normal] =
-        directTerms(tree, in, 0.01 * kDiagonal, 10.0 * std::numbers::pi / 180.0, ops);
-    const Fitness f = model.evaluate(tree);
-    EXPECT_NEAR(f.distanceTerm, distance, 1e-4 * double(in.points.size())) << t;
-    EXPECT_NEAR(f.normalTerm, normal, 1e-4 * double(in.points.size())) << t;
-  }
+  expectTermsMatchDirect(model, in, SardfOperations(0.1 * kDiagonal),
+                         randomTrees(library, 13, 20, 4, 0.9));
   // The solid is min/max's: the exact cube scores every point on its faces.
   const test::OrientedPoints faces = test::cubeFacePoints(10);
   const FitnessModel onFaces(faces.points, faces.normals, kDiagonal, library, options);

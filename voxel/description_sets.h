@@ -19,6 +19,10 @@ struct DescriptionSet {
   bool exceedsGrid = false;  ///< μ: the solid reaches the outermost layer of voxels
 };
 
+/// V alone: the voxels of `grid` whose centre lies in `solid` (f >= 0). Only
+/// voxels inside the solid's bounds are evaluated, a row of them at a time.
+VoxelSet solidVoxels(const CsgTree& solid, const VoxelGrid& grid);
+
 /// Computes the description of `solid`. Only voxels inside the solid's
 /// bounds are evaluated.
 DescriptionSet describe(const CsgTree& solid, const VoxelGrid& grid, const VoxelLabels& labels);
