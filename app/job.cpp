@@ -86,6 +86,10 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
       ->check(inRange(0, 1e9));
   app.add_flag("!--no-separators", gp.primitives.separators,
                "gp: no separating half-spaces around the curved surfaces");
+  app.add_flag("--partition", gp.partition,
+               "gp: partition the search (one search per maximal clique of the primitive-overlap "
+               "graph, in parallel; the trees merged, then a search on all points seeded with "
+               "them)");
 }
 
 ReconstructOptions pipelineOptions(const JobSettings& s) {
@@ -182,6 +186,7 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
     parameters["voxel_weight"] = gp.fitness.voxelWeight;
     parameters["rough_points"] = gp.roughPoints;
     parameters["separators"] = gp.primitives.separators;
+    parameters["partition"] = gp.partition;
   }
   report["parameters"] = std::move(parameters);
   const auto& dims = rec.grid.dims();
@@ -209,6 +214,21 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
                         {"stop", evolveStopName(s.stop)},
                         {"clipped_to_scan_box", rec.gp.clipped},
                         {"time_limit_hit", rec.timeLimitHit}};
+    if (rec.gp.partitioned) {
+      const PartitionedResult& p = *rec.gp.partitioned;
+      nlohmann::ordered_json parts = nlohmann::ordered_json::array();
+      for (const PartitionRun& run : p.partitions) {
+        parts.push_back({{"primitives", run.primitives.size()},
+                         {"points", run.points},
+                         {"generations", run.generations},
+                         {"nodes", run.nodes},
+                         {"seconds", run.seconds}});
+      }
+      report["partitioning"] = {
+          {"partitions", std::move(parts)},          {"merged_nodes", p.mergedNodes},
+          {"partition_seconds", p.partitionSeconds}, {"search_seconds", p.searchSeconds},
+          {"merge_seconds", p.mergeSeconds},         {"final_seconds", p.finalSeconds}};
+    }
   }
   report["tree"] = {{"primitives", tree.primitiveCount()},
                     {"operations", tree.operationCount()},

@@ -140,7 +140,15 @@ void gpMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOpti
                 "library (%zu separators)",
                 s.generations, std::string(evolveStopName(s.stop)).c_str(), s.evaluations,
                 s.fitness.total, out.gp.primitives.library.size(), out.gp.primitives.separators);
-  clock.finish(summary);
+  std::string note = summary;
+  if (out.gp.partitioned) {
+    const PartitionedResult& p = *out.gp.partitioned;
+    std::snprintf(summary, sizeof(summary),
+                  "; %zu partitions searched in %.2f s, merged to %zu nodes, final search %.2f s",
+                  p.partitions.size(), p.searchSeconds, p.mergedNodes, p.finalSeconds);
+    note += summary;
+  }
+  clock.finish(note);
   out.tree = out.gp.tree;
   out.voxels = solidVoxels(out.tree, out.grid);
 }
