@@ -18,11 +18,12 @@ namespace csgvox::app {
 
 void addJobOptions(CLI::App& app, JobSettings& s) {
   app.add_option("--method", s.method,
-                 "How the tree is built: voxel (bounded hypotheses and Wu's two binary "
-                 "optimisations over voxel labels) or gp (the genetic-programming baseline of "
-                 "Fayolle & Pasko 2016: unbounded surfaces and separators combined by a genetic "
-                 "search on the points)")
-      ->check(CLI::IsMember({"voxel", "gp"}));
+                 "How the tree is built: hybrid (the voxel method, then a genetic search on the "
+                 "points repairs its tree where they disagree with it; the default), voxel "
+                 "(bounded hypotheses and Wu's two binary optimisations over voxel labels) or gp "
+                 "(the genetic-programming baseline of Fayolle & Pasko 2016: unbounded surfaces "
+                 "and separators combined by a genetic search on the points)")
+      ->check(CLI::IsMember({"hybrid", "voxel", "gp"}));
   app.add_option("--res", s.resolution, "Voxels along the longest side of the part")
       ->check(inRange(8, 1024));
   app.add_option("--seed", s.seed, "Random seed; the same seed gives the same tree")
@@ -51,6 +52,26 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
                  "optimisations and the genetic search past it keep the best tree found so far")
       ->check(inRange(0.0, 1e6));
   app.add_option("--mesh-res", s.meshResolution, "Resolution of mesh.ply")->check(inRange(8, 2048));
+  HybridOptions& hy = s.pipeline.hybrid;
+  app.add_option("--refine-generations", hy.evolve.maxGenerations,
+                 "hybrid: generations at most of each region's search")
+      ->check(inRange(0, 1e7));
+  app.add_option("--refine-stall", hy.evolve.stallGenerations,
+                 "hybrid: a region's search stops after this many generations without "
+                 "improvement (0: never)")
+      ->check(inRange(0, 1e7));
+  app.add_option("--refine-population", hy.evolve.population,
+                 "hybrid: creatures per generation of each region's search")
+      ->check(inRange(3, 100000));
+  app.add_option("--refine-operations", s.refineOperations,
+                 "hybrid: field of the set operations in the regions' fitness: minmax (the "
+                 "default), sardf (smooth: differs from minmax only at points off the surface, "
+                 "about 7 times slower) or rfunction")
+      ->check(CLI::IsMember({"minmax", "rfunction", "sardf"}));
+  app.add_option("--bad-angle", hy.badAngle,
+                 "hybrid: a point whose normal is further than this from the tree's, in degrees, "
+                 "is badly explained (so is one farther than 1% of the diagonal)")
+      ->check(inRange(0.1, 180.0));
   GpOptions& gp = s.pipeline.gp;
   app.add_option("--population", gp.evolve.population, "gp: creatures per generation")
       ->check(inRange(3, 100000));
@@ -99,6 +120,9 @@ ReconstructOptions pipelineOptions(const JobSettings& s) {
   o.method = methodFromName(s.method);
   o.labels.method = labelMethodFromName(s.labelMethod);
   o.labels.boundary = s.boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
+  o.hybrid.fitness.operations = s.refineOperations == "rfunction" ? SetOperationKind::RFunction
+                                : s.refineOperations == "minmax"  ? SetOperationKind::MinMax
+                                                                  : SetOperationKind::Sardf;
   o.gp.fitness.operations = s.operations == "rfunction" ? SetOperationKind::RFunction
                             : s.operations == "sardf"   ? SetOperationKind::Sardf
                                                         : SetOperationKind::MinMax;
@@ -169,9 +193,18 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
                                        {"time_limit_s", po.timeLimit}};
   if (rec.method == Method::Imported) {
     // The tree was read, not built: only the scan-side settings apply.
-  } else if (rec.method == Method::Voxel) {
+  } else if (rec.method != Method::Gp) {
     parameters["alpha"] = po.construct.subtree.alpha;
     parameters["beta"] = po.construct.unionChoice.beta;
+    if (rec.method == Method::Hybrid) {
+      const HybridOptions& h = po.hybrid;
+      parameters["refine_population"] = h.evolve.population;
+      parameters["refine_generations"] = h.evolve.maxGenerations;
+      parameters["refine_stall"] = h.evolve.stallGenerations;
+      parameters["bad_angle_deg"] = h.badAngle;
+      parameters["refine_operations"] = settings.refineOperations;
+      parameters["refine_voxel_weight"] = h.fitness.voxelWeight;
+    }
   } else {
     const GpOptions& gp = po.gp;
     parameters["population"] = gp.evolve.population;
@@ -193,7 +226,7 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}}, {"voxel_size", rec.grid.voxelSize()}};
   if (rec.method == Method::Imported) {
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()}};
-  } else if (rec.method == Method::Voxel) {
+  } else if (rec.method != Method::Gp) {
     const ConstructStats& st = rec.construction.stats;
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()},
                         {"hypotheses", rec.hypotheses.candidates.size()},
@@ -204,6 +237,30 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
                         {"chosen", st.chosen},
                         {"proved_optimal", st.provedOptimal},
                         {"time_limit_hit", rec.timeLimitHit}};
+    if (rec.method == Method::Hybrid) {
+      const HybridResult& h = rec.hybrid;
+      nlohmann::ordered_json regions = nlohmann::ordered_json::array();
+      for (const HybridRegion& r : h.regions) {
+        regions.push_back({{"bad_points", r.badPoints},
+                           {"points", r.points},
+                           {"members", r.members},
+                           {"library", r.library},
+                           {"generations", r.generations},
+                           {"fitness_before", r.localBefore},
+                           {"fitness_after", r.localAfter},
+                           {"primitives_before", r.primitivesBefore},
+                           {"primitives_after", r.primitivesAfter},
+                           {"replaced", r.replaced},
+                           {"seconds", r.seconds}});
+      }
+      report["refinement"] = {{"bad_points", h.badPoints},
+                              {"regions", std::move(regions)},
+                              {"subtrees_replaced", h.replaced},
+                              {"fitness_before", h.before.total},
+                              {"fitness_after", h.after.total},
+                              {"primitives_before", h.primitivesBefore},
+                              {"primitives_after", h.primitivesAfter}};
+    }
   } else {
     const EvolveResult& s = rec.gp.search;
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()},

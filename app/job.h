@@ -19,10 +19,11 @@ namespace csgvox::app {
 struct JobSettings {
   int resolution = 64;
   std::uint64_t seed = 1;
-  std::string method = "voxel";
+  std::string method = "hybrid";
   std::string labelMethod = "winding";
   std::string boundary = "centre";
   std::string operations = "minmax";
+  std::string refineOperations = "minmax";  ///< hybrid: minmax, rfunction or sardf
   ReconstructOptions pipeline;
   int meshResolution = 160;
 };
