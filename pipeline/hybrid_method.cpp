@@ -335,7 +335,7 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     }
     const CsgTree candidate = library.adopt(normalizeTree(uniteAll(next)));
     const Fitness f = model.evaluate(candidate);
-    if (f.total > best.total) {
+    if (f.total > best.total + options.minGain * double(scan.size())) {
       best = f;
       h.replaced = true;
       ++out.replaced;

@@ -13,8 +13,9 @@
 /// points around it plus the voxel term there (min/max field by default:
 /// on clean scans SARDF gives the same fitness at several times the cost). Regions are
 /// independent, so they run in parallel. A refined subtree replaces the
-/// original only when the whole tree's fitness on all points improves, so
-/// the result is never worse than the voxel tree by that measure; last,
+/// original only when the whole tree's fitness on all points improves (by
+/// more than minGain·N, so noise alone does not swap primitives), so the
+/// result is never worse than the voxel tree by that measure; last,
 /// redundant nodes of the whole tree are removed.
 
 #include <cstddef>
@@ -49,6 +50,8 @@ struct HybridOptions {
   double regionCell = 2.0;         ///< voxels: bad points in neighbouring cells of this size join
   double minRegionPoints = 0.002;  ///< regions with fewer points than this fraction of N are left
   double margin = 2.0;             ///< voxels added around a region and its subtree
+  double minGain = 0.002;  ///< a replacement must raise the whole tree's fitness by this fraction
+                           ///< of N at least (a smallest region's worth of points)
   std::size_t maxCandidates = 32;  ///< candidates added to a region's primitives at most
   std::size_t roughPoints = 6000;  ///< a region's generations use at most this many points until
                                    ///< its search stalls

@@ -84,21 +84,22 @@ TEST_F(Cli, CompareShowsEveryMethodAndTheImportedTree) {
                               "cube_expr.txt -o " + (dir_ / "cmp").string(),
                           dir_, 600);
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* method : {"voxel", "gp", "import-gp"}) {
+  for (const char* method : {"voxel", "hybrid", "gp", "import-gp"}) {
     EXPECT_NE(r.out.find(method), std::string::npos) << r.out;
     EXPECT_TRUE(fs::exists(dir_ / "cmp" / method / "tree.json")) << method;
     EXPECT_TRUE(fs::exists(dir_ / "cmp" / method / "report.json")) << method;
   }
   const nlohmann::json summary = readJson(dir_ / "cmp" / "compare.json");
-  ASSERT_EQ(summary["rows"].size(), 3u);
+  ASSERT_EQ(summary["rows"].size(), 4u);
   for (const auto& row : summary["rows"]) {
     EXPECT_GE(row["voxel_iou"].get<double>(), 0.95) << row.dump();
     EXPECT_GT(row["primitives"].get<int>(), 0);
   }
   // The published code's tree for the cube is the cube (with redundant nodes).
-  EXPECT_EQ(summary["rows"][2]["method"], "import-gp");
-  EXPECT_GT(summary["rows"][2]["operations"].get<int>(),
-            summary["rows"][1]["operations"].get<int>());
+  EXPECT_EQ(summary["rows"][1]["method"], "hybrid");
+  EXPECT_EQ(summary["rows"][3]["method"], "import-gp");
+  EXPECT_GT(summary["rows"][3]["operations"].get<int>(),
+            summary["rows"][2]["operations"].get<int>());
   EXPECT_EQ(run("compare " + kCube + " --methods voxel,magic", dir_).code, 1);
 }
 
