@@ -97,11 +97,32 @@ struct Writer {
         node(*n.children.front(), indent + 1);
         out << pad << "}\n";
         return;
+      case NodeKind::Intersection:
+        intersection(n, 0, indent);
+        return;
       default:
+        if (n.children.size() == 1) {
+          node(*n.children.front(), indent);
+          return;
+        }
         out << pad << nodeKindName(n.kind) << "() {\n";
         for (const NodePtr& c : n.children) node(*c, indent + 1);
         out << pad << "}\n";
     }
+  }
+
+  // The intersection of children first.. as nested pairs: FreeCAD's
+  // importer (0.20) fails on an intersection of one or of more than two.
+  void intersection(const Node& n, std::size_t first, int indent) const {
+    if (first + 1 == n.children.size()) {
+      node(*n.children[first], indent);
+      return;
+    }
+    const std::string pad(std::size_t(2 * indent), ' ');
+    out << pad << "intersection() {\n";
+    node(*n.children[first], indent + 1);
+    intersection(n, first + 1, indent + 1);
+    out << pad << "}\n";
   }
 };
 
