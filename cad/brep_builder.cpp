@@ -25,7 +25,11 @@
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <functional>
+#include <random>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -51,6 +55,12 @@ TopoDS_Shape cube(const Mat3& frame, const Vec3& center, const Vec3& size) {
   const Vec3 corner = center - r * (0.5 * size);
   const gp_Ax2 ax(pnt(corner), dir(r.col(2)), dir(r.col(0)));
   return BRepPrimAPI_MakeBox(ax, size.x(), size.y(), size.z()).Shape();
+}
+
+Aabb grownBox(Aabb box, double margin) {
+  box.min.array() -= margin;
+  box.max.array() += margin;
+  return box;
 }
 
 TopoDS_Shape cube(const StandInCube& c) { return cube(c.frame, c.center, Vec3::Constant(c.edge)); }
@@ -113,6 +123,7 @@ struct Builder {
     op.SetArguments(args);
     op.SetTools(tools);
     op.SetNonDestructive(true);
+    if (options.fuzzy > 0.0) op.SetFuzzyValue(options.fuzzy * extent.diagonal());
     op.SetRunParallel(false);
     op.SetToFillHistory(false);
     op.Build();
@@ -240,6 +251,40 @@ const Node* faceLeaf(const TopoDS_Face& face, const std::vector<const Node*>& le
   return best;
 }
 
+// The volume of the tree's solid, by stratified sampling of `box` (one
+// random point per cell of an n^3 grid; deterministic).
+double sampledVolume(const CsgTree& tree, const Aabb& box, int n) {
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Vec3 cell = box.size() / double(n);
+  std::vector<Vec3> points;
+  points.reserve(std::size_t(n) * n * n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        points.push_back(box.min + Vec3((i + u(rng)) * cell.x(), (j + u(rng)) * cell.y(),
+                                        (k + u(rng)) * cell.z()));
+      }
+    }
+  }
+  std::vector<double> f(points.size());
+  tree.values(points, f);
+  const auto inside = std::count_if(f.begin(), f.end(), [](double v) { return v >= 0.0; });
+  return double(inside) / double(points.size()) * box.size().prod();
+}
+
+double shapeVolume(const TopoDS_Shape& shape) {
+  GProp_GProps props;
+  BRepGProp::VolumeProperties(shape, props);
+  return props.Mass();
+}
+
+// OpenCASCADE's solid agrees with the tree's when their volumes agree
+// within `tolerance` (relative) or a sliver of the box.
+bool volumesAgree(double brep, double sampled, const Aabb& box, double tolerance) {
+  return std::abs(brep - sampled) <= tolerance * std::max(sampled, 1e-4 * box.size().prod());
+}
+
 }  // namespace
 
 BrepSummary summarize(const TopoDS_Shape& shape) {
@@ -275,6 +320,41 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   NodePath path;
   std::optional<TopoDS_Shape> shape = b.node(*tree.root(), path);
   if (!shape) throw CadError("the solid is empty: no point lies inside the tree");
+  // OpenCASCADE's booleans can return a valid but wrong solid on nearly
+  // coincident or tangent faces: compare volumes with the tree's, and on a
+  // mismatch name the first operation (children before parents) whose
+  // solid disagrees.
+  if (options.volumeTolerance > 0.0) {
+    const Aabb box = grownBox(extent, 0.01 * extent.diagonal());
+    const double sampled = sampledVolume(tree, box, 48);
+    const double brep = shapeVolume(*shape);
+    if (!volumesAgree(brep, sampled, box, options.volumeTolerance)) {
+      std::string where = b.nodeText(*tree.root(), NodePath{});
+      std::function<bool(const Node&, NodePath&)> locate = [&](const Node& n, NodePath& p) {
+        if (n.kind == NodeKind::Primitive) return false;
+        for (std::size_t i = 0; i < n.children.size(); ++i) {
+          p.push_back(i);
+          const bool found = locate(*n.children[i], p);
+          p.pop_back();
+          if (found) return true;
+        }
+        const CsgTree sub(tree.nodeAt(p));
+        NodePath local;
+        const auto s = b.node(n, local);
+        const Aabb subBox = grownBox(exportExtent(sub), 0.01 * extent.diagonal());
+        const double v = sampledVolume(sub, subBox, 48);
+        if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance)) return false;
+        where = b.nodeText(n, p);
+        return true;
+      };
+      NodePath p;
+      locate(*tree.root(), p);
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), " (the part comes out with volume %.6g instead of %.6g)",
+                    brep, sampled);
+      throw CadError("OpenCASCADE computed a wrong solid for " + where + buf);
+    }
+  }
 
   BrepResult result;
   try {

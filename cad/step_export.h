@@ -22,6 +22,8 @@ struct StepOptions {
   double halfSpaceScale = 2.0;  ///< edge of the half-space cubes, multiple of the part's diagonal
   bool unifyFaces = true;       ///< merge the pieces of one surface that the booleans split
   bool nameFaces = true;        ///< name each face after the primitive it lies on
+  double fuzzy = 0.0;           ///< boolean tolerance (OpenCASCADE's fuzzy value), fraction of the part's diagonal
+  double volumeTolerance = 0.01;  ///< refuse a solid whose volume differs more from the tree's (sampled), fraction; 0: no check
   std::string productName = "csgvox part";  ///< name of the solid's product in the file
 };
 
@@ -50,7 +52,8 @@ bool stepExportAvailable();
 /// only once the file is complete). Returns the written solid's summary.
 /// @throw std::invalid_argument for an empty tree or one without a bounded
 ///        primitive; CadError naming the node whose boolean operation
-///        failed, or when the solid is empty or invalid; IoError when the
+///        failed or gave a solid whose volume is not the tree's, or when the
+///        solid is empty or invalid; IoError when the
 ///        file cannot be written or the build has no OpenCASCADE.
 BrepSummary writeStep(const std::filesystem::path& path, const CsgTree& tree,
                       const StepOptions& options = {});

@@ -136,3 +136,28 @@ TEST_F(StepExport, ReadingANonStepFileIsAParseError) {
 
 }  // namespace
 }  // namespace csgvox
+
+namespace csgvox {
+namespace {
+
+// A tree the main job reconstructed from data/bearing_housing/scan.ply: a
+// box minus a torus tangent to its bottom face, intersected with a
+// cylinder, for which OpenCASCADE 7.6 returns a valid but empty solid.
+// The check of the volume refuses it and names the operation.
+TEST_F(StepExport, AWrongBooleanResultIsRefusedNamingTheNode) {
+  const CsgTree tree = readTreeJson(test::dataDir() / "regressions" / "occt-wrong-intersection.json");
+  const fs::path path = dir_ / "wrong.step";
+  try {
+    writeStep(path, tree);
+    FAIL() << "a solid with the wrong volume was written";
+  } catch (const CadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the intersection at node root/0/2 (difference of 2, cylinder7)"),
+              std::string::npos)
+        << what;
+  }
+  EXPECT_FALSE(fs::exists(path));
+}
+
+}  // namespace
+}  // namespace csgvox
