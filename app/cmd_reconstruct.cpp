@@ -86,7 +86,8 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
         writeJob(output, scanPath, scan, rec, opt->job, timings, console);
     output.commit();
     std::string written;
-    for (const auto& name : report["outputs"]) written += (written.empty() ? "" : ", ") + name.get<std::string>();
+    for (const auto& name : report["outputs"])
+      written += (written.empty() ? "" : ", ") + name.get<std::string>();
     console.info("wrote " + written + " in " + output.folder().string());
     return 0;
   };

@@ -268,7 +268,8 @@ nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& 
   report["warnings"] = std::move(warnings);
   nlohmann::ordered_json outputs = nlohmann::ordered_json::array();
   for (const std::string& name : jobFiles()) {
-    if (name == "report.json" || std::filesystem::exists(output.path(name))) outputs.push_back(name);
+    if (name == "report.json" || std::filesystem::exists(output.path(name)))
+      outputs.push_back(name);
   }
   report["outputs"] = std::move(outputs);
   report["timings_s"] = timings;

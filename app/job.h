@@ -36,8 +36,8 @@ ReconstructOptions pipelineOptions(const JobSettings& settings);
 
 /// The files of one job (tree.step and preview.png may be skipped: see writeJob).
 inline const std::vector<std::string>& jobFiles() {
-  static const std::vector<std::string> files = {"tree.json", "tree.scad", "tree.txt",
-                                                 "tree.csg",  "tree.step", "preview.png",
+  static const std::vector<std::string> files = {"tree.json", "tree.scad",  "tree.txt",
+                                                 "tree.csg",  "tree.step",  "preview.png",
                                                  "mesh.ply",  "report.json"};
   return files;
 }

@@ -29,9 +29,9 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <random>
 #include <limits>
 #include <optional>
+#include <random>
 #include <sstream>
 
 #include "core/export_extent.h"
@@ -85,7 +85,8 @@ struct Builder {
       }
       return BRepPrimAPI_MakeCone(ax, c->radiusBottom, c->radiusTop, c->height).Shape();
     }
-    if (const auto* s = p.as<Sphere>()) return BRepPrimAPI_MakeSphere(pnt(s->center), s->radius).Shape();
+    if (const auto* s = p.as<Sphere>())
+      return BRepPrimAPI_MakeSphere(pnt(s->center), s->radius).Shape();
     const Torus& t = std::get<Torus>(p.shape());
     return BRepPrimAPI_MakeTorus(gp_Ax2(pnt(t.center), dir(t.axis)), t.majorRadius, t.minorRadius)
         .Shape();
@@ -103,7 +104,8 @@ struct Builder {
   }
 
   std::string nodeText(const Node& n, const NodePath& path) const {
-    std::string s = "the " + std::string(nodeKindName(n.kind)) + " at node " + pathText(path) + " (";
+    std::string s =
+        "the " + std::string(nodeKindName(n.kind)) + " at node " + pathText(path) + " (";
     for (std::size_t i = 0; i < n.children.size(); ++i) {
       s += (i ? ", " : "") + describe(*n.children[i]);
     }
@@ -343,7 +345,8 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
         const auto s = b.node(n, local);
         const Aabb subBox = grownBox(exportExtent(sub), 0.01 * extent.diagonal());
         const double v = sampledVolume(sub, subBox, 48);
-        if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance)) return false;
+        if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance))
+          return false;
         where = b.nodeText(n, p);
         return true;
       };

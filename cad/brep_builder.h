@@ -14,7 +14,7 @@ namespace csgvox::cad {
 /// The tree's solid (one solid, or a compound of several) and the name of
 /// the primitive each face lies on (faces of no primitive are left out).
 struct BrepResult {
-  TopoDS_Shape shape;                                    // the solid
+  TopoDS_Shape shape;                                           // the solid
   std::vector<std::pair<TopoDS_Shape, std::string>> faceNames;  // face, primitive name
 };
 

@@ -22,8 +22,10 @@ struct StepOptions {
   double halfSpaceScale = 2.0;  ///< edge of the half-space cubes, multiple of the part's diagonal
   bool unifyFaces = true;       ///< merge the pieces of one surface that the booleans split
   bool nameFaces = true;        ///< name each face after the primitive it lies on
-  double fuzzy = 0.0;           ///< boolean tolerance (OpenCASCADE's fuzzy value), fraction of the part's diagonal
-  double volumeTolerance = 0.01;  ///< refuse a solid whose volume differs more from the tree's (sampled), fraction; 0: no check
+  double fuzzy =
+      0.0;  ///< boolean tolerance (OpenCASCADE's fuzzy value), fraction of the part's diagonal
+  double volumeTolerance = 0.01;  ///< refuse a solid whose volume differs more from the tree's
+                                  ///< (sampled), fraction; 0: no check
   std::string productName = "csgvox part";  ///< name of the solid's product in the file
 };
 
@@ -36,12 +38,12 @@ class CadError : public std::runtime_error {
 
 /// What a B-rep holds, measured by OpenCASCADE.
 struct BrepSummary {
-  std::size_t solids = 0;   ///< number of solids
-  std::size_t faces = 0;    ///< number of faces
-  bool valid = false;       ///< BRepCheck_Analyzer finds no fault
-  bool closed = false;      ///< every shell of every solid is closed
-  double volume = 0.0;      ///< enclosed volume, scan units cubed
-  Aabb bounds;              ///< tight axis-aligned bounds
+  std::size_t solids = 0;      ///< number of solids
+  std::size_t faces = 0;       ///< number of faces
+  bool valid = false;          ///< BRepCheck_Analyzer finds no fault
+  bool closed = false;         ///< every shell of every solid is closed
+  double volume = 0.0;         ///< enclosed volume, scan units cubed
+  Aabb bounds;                 ///< tight axis-aligned bounds
   std::size_t namedFaces = 0;  ///< faces named after a primitive (writeStep() only)
 };
 

@@ -8,12 +8,14 @@ namespace csgvox {
 bool stepExportAvailable() { return false; }
 
 BrepSummary writeStep(const std::filesystem::path& path, const CsgTree&, const StepOptions&) {
-  throw IoError(path.string() + ": this build of csgvox has no STEP export (built without "
+  throw IoError(path.string() +
+                ": this build of csgvox has no STEP export (built without "
                 "OpenCASCADE)");
 }
 
 BrepSummary readStepSummary(const std::filesystem::path& path) {
-  throw IoError(path.string() + ": this build of csgvox cannot read STEP (built without "
+  throw IoError(path.string() +
+                ": this build of csgvox cannot read STEP (built without "
                 "OpenCASCADE)");
 }
 

@@ -13,9 +13,9 @@ using Rgb = std::array<std::uint8_t, 3>;
 /// A width x height picture; pixel (x, y) (x to the right, y down from the
 /// top row) is rgb[3 * (y * width + x) + channel].
 struct RgbImage {
-  int width = 0;                   ///< pixels per row
-  int height = 0;                  ///< rows
-  std::vector<std::uint8_t> rgb;   ///< 3 * width * height bytes
+  int width = 0;                  ///< pixels per row
+  int height = 0;                 ///< rows
+  std::vector<std::uint8_t> rgb;  ///< 3 * width * height bytes
 
   /// A picture filled with one colour.
   static RgbImage filled(int width, int height, Rgb colour) {

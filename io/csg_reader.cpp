@@ -254,16 +254,20 @@ class Builder {
 
   Placement matrix(const Statement& s) const {
     const Value* m = s.arg("m", 0);
-    if (!m || !m->isList || m->list.size() < 3) parser_.fail("multmatrix: needs a 4x4 matrix", s.line);
+    if (!m || !m->isList || m->list.size() < 3)
+      parser_.fail("multmatrix: needs a 4x4 matrix", s.line);
     Placement p;
     for (int i = 0; i < 3; ++i) {
       const Value& row = m->list[std::size_t(i)];
-      if (!row.isList || row.list.size() != 4) parser_.fail("multmatrix: rows need 4 numbers", s.line);
+      if (!row.isList || row.list.size() != 4)
+        parser_.fail("multmatrix: rows need 4 numbers", s.line);
       for (int j = 0; j < 4; ++j) {
         const Value& e = row.list[std::size_t(j)];
         if (!e.number) parser_.fail("multmatrix: rows need 4 numbers", s.line);
-        if (j < 3) p.rotation(i, j) = *e.number;
-        else p.translation[i] = *e.number;
+        if (j < 3)
+          p.rotation(i, j) = *e.number;
+        else
+          p.translation[i] = *e.number;
       }
     }
     if ((p.rotation.transpose() * p.rotation - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
@@ -274,7 +278,8 @@ class Builder {
   }
 
   static Placement compose(const Placement& outer, const Placement& inner) {
-    return {outer.rotation * inner.rotation, outer.rotation * inner.translation + outer.translation};
+    return {outer.rotation * inner.rotation,
+            outer.rotation * inner.translation + outer.translation};
   }
 
   CsgTree cube(const Statement& s, const Placement& at) const {

@@ -55,20 +55,19 @@ struct Writer {
            name + ": halfspace " + formatVector(h->normal) + ".x <= " + formatNumber(h->offset));
     } else if (const auto* b0 = p.as<Box>()) {
       const Box b = canonicalBox(*b0);
-      placed(pad, b.axes, b.center, "cube(size = " + formatVector(2.0 * b.halfSize) +
-                                        ", center = true);",
-             name);
+      placed(pad, b.axes, b.center,
+             "cube(size = " + formatVector(2.0 * b.halfSize) + ", center = true);", name);
     } else if (const auto* c = p.as<Cylinder>()) {
       const std::string r = formatNumber(c->radius);
       placed(pad, frameFromAxis(c->axis), c->center,
-             std::string("cylinder(") + kExact + ", h = " + formatNumber(c->height) + ", r1 = " + r +
-                 ", r2 = " + r + ", center = true);",
+             std::string("cylinder(") + kExact + ", h = " + formatNumber(c->height) +
+                 ", r1 = " + r + ", r2 = " + r + ", center = true);",
              name);
     } else if (const auto* c = p.as<Cone>()) {
       placed(pad, frameFromAxis(c->axis), c->center,
              std::string("cylinder(") + kExact + ", h = " + formatNumber(c->height) +
-                 ", r1 = " + formatNumber(c->radiusBottom) + ", r2 = " + formatNumber(c->radiusTop) +
-                 ", center = true);",
+                 ", r1 = " + formatNumber(c->radiusBottom) +
+                 ", r2 = " + formatNumber(c->radiusTop) + ", center = true);",
              name);
     } else if (const auto* s = p.as<Sphere>()) {
       placed(pad, Mat3::Identity(), s->center,
@@ -77,8 +76,7 @@ struct Writer {
       out << pad << multmatrix(frameFromAxis(t->axis), t->center) << " {  // " << name << "\n"
           << pad << "  rotate_extrude(angle = 360, convexity = 2, " << kExact << ") {\n"
           << pad << "    " << multmatrix(Mat3::Identity(), Vec3(t->majorRadius, 0, 0)) << " {\n"
-          << pad << "      circle(" << kExact << ", r = " << formatNumber(t->minorRadius)
-          << ");\n"
+          << pad << "      circle(" << kExact << ", r = " << formatNumber(t->minorRadius) << ");\n"
           << pad << "    }\n"
           << pad << "  }\n"
           << pad << "}\n";

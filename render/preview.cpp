@@ -36,7 +36,8 @@ struct DepthBuffer {
 DepthBuffer rasterize(const TriangleMesh& mesh, const PreviewView& view) {
   DepthBuffer buf(view.width, view.height);
   std::vector<Vec3> projected(mesh.vertices.size());
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) projected[i] = view.project(mesh.vertices[i]);
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    projected[i] = view.project(mesh.vertices[i]);
   for (const auto& t : mesh.triangles) {
     const Vec3& a = projected[t[0]];
     const Vec3& b = projected[t[1]];
@@ -97,18 +98,19 @@ void drawSolid(RgbImage& image, const CsgTree& tree, const DepthBuffer& buf,
       if (buf.depth[k] == kInf) continue;
       const Vec3& n = normals[k];
       bool edge = false;
-      for (const auto& [dx, dy] : {std::pair{1, 0}, std::pair{0, 1}, std::pair{-1, 0},
-                                   std::pair{0, -1}}) {
+      for (const auto& [dx, dy] :
+           {std::pair{1, 0}, std::pair{0, 1}, std::pair{-1, 0}, std::pair{0, -1}}) {
         const int u = x + dx, v = y + dy;
         if (u < 0 || v < 0 || u >= view.width || v >= view.height) continue;
         const std::size_t j = buf.index(u, v);
         if (buf.depth[j] == kInf) continue;
-        if (normals[j].dot(n) < 0.85 || std::abs(buf.depth[j] - buf.depth[k]) > 4 * view.pixelSize) {
+        if (normals[j].dot(n) < 0.85 ||
+            std::abs(buf.depth[j] - buf.depth[k]) > 4 * view.pixelSize) {
           edge = true;
         }
       }
-      const double light = 0.28 + 0.62 * std::max(0.0, n.dot(key)) +
-                           0.22 * std::max(0.0, n.dot(fill));
+      const double light =
+          0.28 + 0.62 * std::max(0.0, n.dot(key)) + 0.22 * std::max(0.0, n.dot(fill));
       const double spec = 0.18 * std::pow(std::max(0.0, n.dot(half)), 40.0);
       Vec3 c = (light * base + Vec3::Constant(spec)) * 255.0;
       if (edge) c *= 0.55;
@@ -121,8 +123,11 @@ void drawSolid(RgbImage& image, const CsgTree& tree, const DepthBuffer& buf,
 
 // A blue-green-yellow-red scale for t in [0, 1].
 Rgb scaleColour(double t) {
-  static const Vec3 stops[] = {{0.19, 0.27, 0.85}, {0.10, 0.70, 0.85}, {0.25, 0.80, 0.30},
-                               {0.95, 0.85, 0.15}, {0.88, 0.18, 0.12}};
+  static const Vec3 stops[] = {{0.19, 0.27, 0.85},
+                               {0.10, 0.70, 0.85},
+                               {0.25, 0.80, 0.30},
+                               {0.95, 0.85, 0.15},
+                               {0.88, 0.18, 0.12}};
   t = std::clamp(t, 0.0, 1.0) * 4.0;
   const int i = std::min(3, int(t));
   const Vec3 c = stops[i] + (t - i) * (stops[i + 1] - stops[i]);
@@ -200,7 +205,8 @@ double drawScan(RgbImage& image, int offsetX, const CsgTree& tree, const PointCl
     for (int y = cy - reach; y <= cy + reach; ++y) {
       for (int x = cx - reach; x <= cx + reach; ++x) {
         if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
-        if ((x - p.x()) * (x - p.x()) + (y - p.y()) * (y - p.y()) > radius * radius + 0.25) continue;
+        if ((x - p.x()) * (x - p.x()) + (y - p.y()) * (y - p.y()) > radius * radius + 0.25)
+          continue;
         double& d = depth[std::size_t(y) * view.width + x];
         if (p.z() >= d) continue;
         d = p.z();
@@ -225,8 +231,8 @@ void drawColourBar(RgbImage& image, int x0, int width, int y0, double top) {
     std::string label = percent(top * i / 4.0);
     if (i == 4) label = ">= " + label + " % of D";
     const int w = textWidth(label);
-    text(image, std::clamp(x - (i == 4 ? w - 8 : w / 2), x0 + 2, x0 + width - w - 2),
-         by + barH + 6, label, ink);
+    text(image, std::clamp(x - (i == 4 ? w - 8 : w / 2), x0 + 2, x0 + width - w - 2), by + barH + 6,
+         label, ink);
   }
 }
 

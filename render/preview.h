@@ -15,15 +15,15 @@ namespace csgvox {
 
 /// Options of renderPreview().
 struct PreviewOptions {
-  int panelSize = 480;          ///< width and height of each panel, pixels (64..4096)
-  double minScale = 0.001;      ///< the colour bar spans at least this fraction of D
+  int panelSize = 480;               ///< width and height of each panel, pixels (64..4096)
+  double minScale = 0.001;           ///< the colour bar spans at least this fraction of D
   Rgb background = {255, 255, 255};  ///< colour of every pixel that shows nothing
 };
 
 /// The picture and the view both panels share.
 struct Preview {
-  RgbImage image;    ///< the solid's panel on the left, the scan's on the right (with a scan)
-  PreviewView view;  ///< the solid's panel is image pixels [0, view.width) x [0, view.height)
+  RgbImage image;         ///< the solid's panel on the left, the scan's on the right (with a scan)
+  PreviewView view;       ///< the solid's panel is image pixels [0, view.width) x [0, view.height)
   double scaleTop = 0.0;  ///< distance at the top of the colour bar, fraction of D (with a scan)
 };
 

@@ -23,8 +23,8 @@ inline std::vector<Vec3> stratifiedPoints(const Aabb& box, int n, std::uint64_t 
   for (int k = 0; k < n; ++k) {
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
-        points.push_back(box.min +
-                         Vec3((i + u(rng)) * cell.x(), (j + u(rng)) * cell.y(), (k + u(rng)) * cell.z()));
+        points.push_back(box.min + Vec3((i + u(rng)) * cell.x(), (j + u(rng)) * cell.y(),
+                                        (k + u(rng)) * cell.z()));
       }
     }
   }

@@ -47,7 +47,8 @@ TEST_F(Cli, TheMainJobWritesTheCadOutputsAndListsThem) {
   }
 
   // Again without the preview: the older picture does not stay behind.
-  const RunResult again = run("'" + scan + "' -o '" + out.string() + "' --quiet --no-preview", dir_);
+  const RunResult again =
+      run("'" + scan + "' -o '" + out.string() + "' --quiet --no-preview", dir_);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_FALSE(fs::exists(out / "preview.png"));
   const auto listed = outputsOf(out / "report.json");
@@ -59,14 +60,18 @@ TEST_F(Cli, RenderWritesStepCsgAndPng) {
   const std::string scan = (test::dataDir() / "knob" / "scan_noisy.ply").string();
   EXPECT_EQ(run("render '" + tree + "' -o '" + (dir_ / "k.csg").string() + "' -q", dir_).code, 0);
   EXPECT_EQ(readCsg(dir_ / "k.csg").primitiveCount(), 6u);
-  const RunResult png = run("render '" + tree + "' -o '" + (dir_ / "k.png").string() + "' --scan '" + scan + "' --size 96 -q", dir_);
+  const RunResult png = run("render '" + tree + "' -o '" + (dir_ / "k.png").string() +
+                                "' --scan '" + scan + "' --size 96 -q",
+                            dir_);
   ASSERT_EQ(png.code, 0) << png.err;
   EXPECT_EQ(readPng(dir_ / "k.png").width, 2 * 96);
-  const RunResult alone = run("render '" + tree + "' -o '" + (dir_ / "k1.png").string() + "' --size 96 -q", dir_);
+  const RunResult alone =
+      run("render '" + tree + "' -o '" + (dir_ / "k1.png").string() + "' --size 96 -q", dir_);
   ASSERT_EQ(alone.code, 0) << alone.err;
   EXPECT_EQ(readPng(dir_ / "k1.png").width, 96);
   if (!stepExportAvailable()) GTEST_SKIP() << "built without OpenCASCADE";
-  const RunResult step = run("render '" + tree + "' -o '" + (dir_ / "k.step").string() + "' -q", dir_);
+  const RunResult step =
+      run("render '" + tree + "' -o '" + (dir_ / "k.step").string() + "' -q", dir_);
   ASSERT_EQ(step.code, 0) << step.err;
   EXPECT_EQ(readStepSummary(dir_ / "k.step").solids, 1u);
 }
@@ -77,9 +82,9 @@ TEST_F(Cli, AnEmptySolidIsOneErrorLineAndNoStepFile) {
         R"({"root": {"op": "intersection", "children": [
              {"type": "sphere", "name": "a", "center": [0, 0, 0], "radius": 1},
              {"type": "sphere", "name": "b", "center": [5, 0, 0], "radius": 1}]}})");
-  expectCleanError("render '" + (dir_ / "apart.json").string() + "' -o '" +
-                       (dir_ / "apart.step").string() + "'",
-                   "empty");
+  expectCleanError(
+      "render '" + (dir_ / "apart.json").string() + "' -o '" + (dir_ / "apart.step").string() + "'",
+      "empty");
   EXPECT_FALSE(fs::exists(dir_ / "apart.step"));
 }
 

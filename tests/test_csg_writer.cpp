@@ -42,7 +42,8 @@ TEST_F(CsgFile, EveryBundledPartReadsBackAsTheSameSolid) {
     const CsgTree back = readCsg(path);
     EXPECT_EQ(back.primitiveCount(), tree.primitiveCount());
     const Aabb extent = exportExtent(tree);
-    const double iou = test::stratifiedIou(tree, back, test::grown(extent, 0.02 * extent.diagonal()));
+    const double iou =
+        test::stratifiedIou(tree, back, test::grown(extent, 0.02 * extent.diagonal()));
     EXPECT_GE(iou, 0.999);
   }
 }
@@ -58,11 +59,10 @@ TEST_F(CsgFile, RandomTreesWithComplementsReadBackAsTheSameSolid) {
 }
 
 TEST(CsgFormat, WritesExactSolidsThatFreeCadTurnsIntoPartFeatures) {
-  const CsgTree plate = CsgTree::leaf(
-      Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)}, "plate");
+  const CsgTree plate =
+      CsgTree::leaf(Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)}, "plate");
   const CsgTree hole = CsgTree::leaf(Cylinder{Vec3(30, 20, 2.5), Vec3::UnitZ(), 4, 7}, "hole");
-  const CsgTree ring =
-      CsgTree::leaf(Torus{Vec3(0, 0, 5), Vec3::UnitX(), 10, 2}, "ring");
+  const CsgTree ring = CsgTree::leaf(Torus{Vec3(0, 0, 5), Vec3::UnitX(), 10, 2}, "ring");
   const std::string text = csgText(CsgTree::subtract({CsgTree::unite({plate, ring}), hole}));
   EXPECT_NE(text.find("difference() {\n  union() {"), std::string::npos) << text;
   EXPECT_NE(text.find("multmatrix([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2.5], [0, 0, 0, 1]]) {\n"
@@ -100,7 +100,7 @@ TEST(CsgReader, ReadsOpenScadsOwnSpellings) {
       "    }\n    sphere(r = 0.25);\n  }\n}\n");
   const CsgTree t = readCsg(in);
   EXPECT_TRUE(t.contains(Vec3(0.2, 1.8, 1)));
-  EXPECT_FALSE(t.contains(Vec3(1, 1, 1)));       // the hole, centred at (1, 1)
+  EXPECT_FALSE(t.contains(Vec3(1, 1, 1)));        // the hole, centred at (1, 1)
   EXPECT_FALSE(t.contains(Vec3(0.1, 0.1, 0.1)));  // the sphere at the origin
   EXPECT_FALSE(t.contains(Vec3(2.5, 1, 1)));
 }

@@ -32,7 +32,8 @@ bool haveFreecad() { return std::system("command -v freecadcmd > /dev/null 2>&1"
 class FreeCad : public test::TempDirTest {};
 
 TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {
-  if (!haveFreecad()) GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
+  if (!haveFreecad())
+    GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
   if (!stepExportAvailable()) GTEST_SKIP() << "built without OpenCASCADE (CSGVOX_WITH_OCCT=OFF)";
   std::map<std::string, CsgTree> trees;
   std::map<std::string, double> volumes;
@@ -52,9 +53,8 @@ TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {
                           "/freecad_check.py' > freecad.log 2>&1";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status)) << cmd;
-  ASSERT_TRUE(fs::exists(dir_ / "results.txt"))
-      << "freecadcmd did not finish; its output:\n"
-      << std::ifstream(dir_ / "freecad.log").rdbuf();
+  ASSERT_TRUE(fs::exists(dir_ / "results.txt")) << "freecadcmd did not finish; its output:\n"
+                                                << std::ifstream(dir_ / "freecad.log").rdbuf();
 
   std::ifstream results(dir_ / "results.txt");
   std::string line;

@@ -73,7 +73,8 @@ TEST_F(PreviewTest, TheSolidsPanelShowsTheSolidWhereRaysHitIt) {
     // The scan's panel shows points, the colour bar spans the scale.
     std::size_t scanPixels = 0;
     for (int y = 20; y < po.panelSize; ++y) {
-      for (int x = po.panelSize + 2; x < 2 * po.panelSize; ++x) scanPixels += png.at(x, y) != po.background;
+      for (int x = po.panelSize + 2; x < 2 * po.panelSize; ++x)
+        scanPixels += png.at(x, y) != po.background;
     }
     EXPECT_GT(scanPixels, std::size_t(0.05 * po.panelSize * po.panelSize));
     EXPECT_GE(preview.scaleTop, po.minScale);
@@ -95,7 +96,8 @@ TEST_F(PreviewTest, WithoutAScanThePictureIsTheSolidAlone) {
 }
 
 TEST_F(PreviewTest, BadInputIsRefused) {
-  EXPECT_THROW(renderPreview(CsgTree::leaf(Sphere{}), TriangleMesh{}, nullptr), std::invalid_argument);
+  EXPECT_THROW(renderPreview(CsgTree::leaf(Sphere{}), TriangleMesh{}, nullptr),
+               std::invalid_argument);
   EXPECT_THROW(writePng(dir_ / "x.png", RgbImage{}), std::invalid_argument);
   EXPECT_THROW(readPng(write("bad.png", "not a png")), ParseError);
 }

@@ -40,7 +40,8 @@ TEST_F(StepExport, EveryBundledPartIsOneValidSolidWithTheTreesVolumeAndBounds) {
     const fs::path path = dir_ / (part + ".step");
     const auto t0 = std::chrono::steady_clock::now();
     const BrepSummary written = writeStep(path, tree);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const BrepSummary read = readStepSummary(path);
     EXPECT_EQ(read.solids, 1u);
     EXPECT_TRUE(read.valid);
@@ -145,7 +146,8 @@ namespace {
 // cylinder, for which OpenCASCADE 7.6 returns a valid but empty solid.
 // The check of the volume refuses it and names the operation.
 TEST_F(StepExport, AWrongBooleanResultIsRefusedNamingTheNode) {
-  const CsgTree tree = readTreeJson(test::dataDir() / "regressions" / "occt-wrong-intersection.json");
+  const CsgTree tree =
+      readTreeJson(test::dataDir() / "regressions" / "occt-wrong-intersection.json");
   const fs::path path = dir_ / "wrong.step";
   try {
     writeStep(path, tree);
