@@ -5,14 +5,18 @@
 #include <optional>
 
 #include "app/options.h"
+#include "cad/step_export.h"
 #include "evolve/fitness.h"
+#include "io/csg_writer.h"
 #include "io/mesh_files.h"
+#include "io/png_file.h"
 #include "io/report.h"
 #include "io/scad_export.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
 #include "mesh/fit_metrics.h"
 #include "mesh/mesh_export.h"
+#include "render/preview.h"
 
 namespace csgvox::app {
 
@@ -72,6 +76,7 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
                  "hybrid: a point whose normal is further than this from the tree's, in degrees, "
                  "is badly explained (so is one farther than 1% of the diagonal)")
       ->check(inRange(0.1, 180.0));
+  app.add_flag("!--no-preview", s.preview, "Do not write preview.png");
   GpOptions& gp = s.pipeline.gp;
   app.add_option("--population", gp.evolve.population, "gp: creatures per generation")
       ->check(inRange(3, 100000));
@@ -148,9 +153,38 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobSettings& s
   return model.evaluate(tree);
 }
 
+// tree.step and preview.png. The tree is the result: a solid OpenCASCADE
+// cannot build costs tree.step only (one error line naming the node, a
+// warning in the report), not the job.
+void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
+                     const TriangleMesh& mesh, const JobSettings& settings,
+                     nlohmann::ordered_json& timings, nlohmann::ordered_json& warnings) {
+  Stopwatch watch;
+  if (!stepExportAvailable()) {
+    output.skip("tree.step");
+    warnings.push_back("tree.step: not written: this build has no OpenCASCADE");
+  } else {
+    try {
+      writeStep(output.path("tree.step"), tree);
+    } catch (const CadError& e) {
+      output.skip("tree.step");
+      std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", e.what());
+      warnings.push_back(std::string("tree.step: not written: ") + e.what());
+    }
+  }
+  timings["step"] = watch.seconds();
+  if (!settings.preview) {
+    output.skip("preview.png");
+    return;
+  }
+  watch = Stopwatch();
+  writePng(output.path("preview.png"), renderPreview(tree, mesh, &scan.cloud).image);
+  timings["preview"] = watch.seconds();
+}
+
 }  // namespace
 
-nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::path& scanPath,
+nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& scanPath,
                                 const Scan& scan, const Reconstruction& rec,
                                 const JobSettings& settings, nlohmann::ordered_json timings,
                                 const Console& console) {
@@ -159,15 +193,18 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   writeTreeJson(output.path("tree.json"), tree);
   writeScad(output.path("tree.scad"), tree);
   writeTreeText(output.path("tree.txt"), tree);
+  writeCsg(output.path("tree.csg"), tree);
   MeshOptions mo;
   mo.resolution = settings.meshResolution;
-  writeMesh(output.path("mesh.ply"), meshTree(tree, mo, console.progress()));
+  const TriangleMesh mesh = meshTree(tree, mo, console.progress());
+  writeMesh(output.path("mesh.ply"), mesh);
   timings["export"] = watch.seconds();
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+  writeCadOutputs(output, scan, tree, mesh, settings, timings, warnings);
 
   // The tree is the result: a metric that cannot be computed is a warning
   // in the report, not a failed job.
   watch = Stopwatch();
-  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
   std::optional<FitMetrics> fit;
   try {
     FitOptions fo;
@@ -306,6 +343,12 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
                         {"points", scan.cloud.size()}};
   report["metrics"] = std::move(metrics);
   report["warnings"] = std::move(warnings);
+  nlohmann::ordered_json outputs = nlohmann::ordered_json::array();
+  for (const std::string& name : jobFiles()) {
+    if (name == "report.json" || std::filesystem::exists(output.path(name)))
+      outputs.push_back(name);
+  }
+  report["outputs"] = std::move(outputs);
   report["timings_s"] = timings;
   writeJsonFile(output.path("report.json"), report);
   if (fit) {

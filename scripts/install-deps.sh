@@ -12,4 +12,6 @@ $SUDO apt-get install -y -q --no-install-recommends \
   libeigen3-dev libtbb-dev libgmp-dev libmpfr-dev \
   nlohmann-json3-dev libcli11-dev libnanoflann-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
-  openscad
+  openscad \
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev \
+  libocct-data-exchange-dev libstb-dev freecad-python3
