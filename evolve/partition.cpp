@@ -90,9 +90,11 @@ PrimitiveSupport primitiveSupport(std::span<const Vec3> points, const PrimitiveL
     tbb::parallel_for(std::size_t{0}, points.size(),
                       [&](std::size_t i) { values[i] = std::abs(primitive.value(points[i])); });
     for (std::size_t i = 0; i < points.size(); ++i) {
-      if (values[i] <= tolerance) out.hulls[p].extend(points[i]);
       if (values[i] < distance[i]) distance[i] = values[i], out.nearest[i] = std::uint32_t(p);
     }
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (distance[i] <= tolerance) out.hulls[out.nearest[i]].extend(points[i]);
   }
   return out;
 }

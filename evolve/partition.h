@@ -29,10 +29,14 @@ Graph overlapGraph(std::span<const Aabb> hulls);
 /// clique of its own.
 std::vector<std::vector<std::size_t>> maximalCliques(const Graph& graph);
 
-/// The points each primitive of a library explains: for every primitive, the
-/// box of the points within `tolerance` of its surface (|f| ≤ tolerance;
-/// empty when there are none) — the primitive's hull in the overlap graph —
-/// and for every point the primitive whose surface is nearest (smallest |f|).
+/// The points each primitive of a library explains: for every point the
+/// primitive whose surface is nearest (smallest |f|, the first on a tie), and
+/// for every primitive the box of the points it is nearest to and within
+/// `tolerance` of (empty when there are none) — the primitive's hull in the
+/// overlap graph. A primitive no point is nearest to (an unbounded plane
+/// that only grazes the part, a separator) has no hull: counting every point
+/// within the tolerance instead gives the unbounded primitives of a real
+/// part hulls across the whole part, and hundreds of large cliques.
 struct PrimitiveSupport {
   std::vector<Aabb> hulls;             ///< per primitive
   std::vector<std::uint32_t> nearest;  ///< per point, a library index

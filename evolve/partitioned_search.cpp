@@ -85,8 +85,11 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
   const Clock::time_point searchStart = Clock::now();
   FitnessOptions partFitness = fitness;
   partFitness.voxelWeight = 0.0;
-  EvolveOptions partEvolve = evolveOptions;
-  if (evolveOptions.timeLimit > 0.0) partEvolve.timeLimit = 0.5 * evolveOptions.timeLimit;
+  // The partitions share half the time limit: each one starts with what is
+  // left of it (they run a few at a time).
+  const Clock::time_point partDeadline =
+      start + std::chrono::duration_cast<Clock::duration>(
+                  std::chrono::duration<double>(0.5 * evolveOptions.timeLimit));
   std::vector<CsgTree> trees(partitions.size());
   out.partitions.resize(partitions.size());
   tbb::parallel_for(std::size_t{0}, partitions.size(), [&](std::size_t k) {
@@ -98,7 +101,11 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
       names.push_back(library.name(p));
     }
     const PrimitiveLibrary sub(std::move(primitives), std::move(names));
-    EvolveOptions eo = partEvolve;
+    EvolveOptions eo = evolveOptions;
+    if (evolveOptions.timeLimit > 0.0) {
+      eo.timeLimit =
+          std::max(std::chrono::duration<double>(partDeadline - Clock::now()).count(), 1e-3);
+    }
     eo.seed = partitionSeed(evolveOptions.seed, k);
     eo.variation.maxDepth = heightBound(part.primitives.size(), evolveOptions.variation.maxDepth);
     eo.variation.initialDepth = std::min(eo.variation.initialDepth, eo.variation.maxDepth);

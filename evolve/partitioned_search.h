@@ -49,7 +49,8 @@ struct PartitionedResult {
 /// and the depth bound sqrt(π·C(n,2)) of an n-primitive partition (at most
 /// evolve.variation.maxDepth), and no voxel term (a partition is a piece of
 /// the solid); the final search uses `fitness` as given, with `target`.
-/// A time limit is shared: half for the partitions, the rest for the end.
+/// A time limit is shared: the partitions end by half of it (each starts
+/// with what is left), the final search has the rest.
 /// `onGeneration` reports the final search's generations.
 /// @throw std::invalid_argument as evolve() and FitnessModel.
 PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<const Vec3> normals,
