@@ -249,12 +249,15 @@ BatchOutcome runBatch(const std::vector<BatchScan>& scans, const BatchOptions& o
                       const Console& console) {
   BatchOutcome outcome;
   std::error_code ec;
-  fs::create_directories(options.outDir, ec);
-  if (ec) throw IoError(options.outDir.string() + ": cannot be created: " + ec.message());
+  const fs::path summaryDir = options.summaryDir.empty() ? options.outDir : options.summaryDir;
+  for (const fs::path& dir : {options.outDir, summaryDir}) {
+    fs::create_directories(dir, ec);
+    if (ec) throw IoError(dir.string() + ": cannot be created: " + ec.message());
+  }
   const std::map<std::string, nlohmann::json> recorded =
-      options.resume ? readSummaryRows(options.outDir / "summary.jsonl")
+      options.resume ? readSummaryRows(summaryDir / "summary.jsonl")
                      : std::map<std::string, nlohmann::json>{};
-  SummaryWriter summary(options.outDir, options.resume);
+  SummaryWriter summary(summaryDir, options.resume);
 
   // --resume: finished outputs and recorded errors are done; a finished
   // scan whose row a killed run did not write gets it now.
@@ -300,7 +303,7 @@ BatchOutcome runBatch(const std::vector<BatchScan>& scans, const BatchOptions& o
                " to run, " + std::to_string(jobs) + " at once, " + std::to_string(threads) +
                (threads == 1 ? " thread" : " threads") + " each");
 
-  const fs::path logs = options.outDir / (".batch-logs-" + std::to_string(getpid()));
+  const fs::path logs = summaryDir / (".batch-logs-" + std::to_string(getpid()));
   fs::create_directories(logs, ec);
   if (ec) throw IoError(logs.string() + ": cannot be created: " + ec.message());
 

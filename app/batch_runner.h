@@ -15,7 +15,8 @@ namespace csgvox::app {
 
 /// Options of runBatch().
 struct BatchOptions {
-  std::filesystem::path outDir;  ///< the scans' output folders and the summary go here
+  std::filesystem::path outDir;      ///< the scans' output folders go here
+  std::filesystem::path summaryDir;  ///< summary.jsonl and summary.csv go here (empty: outDir)
   int jobs = 0;  ///< scans at once (0: as many as the cores and the available memory allow)
   int threadsPerJob = 0;  ///< worker threads of each job (0: the cores shared among the jobs)
   bool resume = false;  ///< skip scans with complete outputs or a recorded error; keep the summary

@@ -2,6 +2,8 @@
 // the main job on every scan of the inputs, a row per scan in
 // summary.jsonl and summary.csv.
 
+#include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,11 +18,15 @@
 
 namespace csgvox::app {
 
+namespace fs = std::filesystem;
+
 namespace {
 
 struct CommandOptions {
   std::vector<std::string> inputs;
   std::string outDir;
+  std::string summaryDir;
+  bool list = false;
   int jobs = 0;
   bool resume = false;
   JobSettings job;
@@ -62,30 +68,41 @@ Command setupBatch(CLI::App& app, CommonOptions& common) {
   app.add_flag("--resume", opt->resume,
                "Skip scans whose outputs are complete or whose error is recorded; keep the "
                "summary's rows");
+  app.add_option("--summary-dir", opt->summaryDir,
+                 "Folder of summary.jsonl and summary.csv (default: the output folder); one per "
+                 "task when tasks of a cluster share the output folder");
+  app.add_flag("--list", opt->list,
+               "Print the scans the inputs hold, one path per line, and run nothing");
   CLI::Option_group* job = app.add_option_group("Main job", "Options of every scan's main job");
   addJobOptions(*job, opt->job);
   return [opt, job, &common]() -> int {
     Console console(common.quiet);
     BatchOptions bo;
     bo.outDir = opt->outDir;
+    bo.summaryDir = opt->summaryDir;
     bo.jobs = opt->jobs;
     bo.threadsPerJob = common.threads;
     bo.resume = opt->resume;
     bo.jobArguments = givenOptions(*job);
     const std::vector<BatchScan> scans = collectScans(opt->inputs, bo.outDir);
     if (scans.empty()) throw IoError("no scan files found in the inputs");
+    if (opt->list) {
+      for (const BatchScan& scan : scans) std::printf("%s\n", scan.label.c_str());
+      return 0;
+    }
     const BatchOutcome out = runBatch(scans, bo, console);
+    const fs::path summaryDir = bo.summaryDir.empty() ? bo.outDir : bo.summaryDir;
     const int failed = out.failed + out.failedBefore;
     console.info("batch: " + std::to_string(out.ok) + " reconstructed, " +
                  std::to_string(out.failed) + " failed, " + std::to_string(out.skipped) +
-                 " already done; rows in " + (bo.outDir / "summary.csv").string());
+                 " already done; rows in " + (summaryDir / "summary.csv").string());
     if (out.interrupted) {
       std::fprintf(stderr, "csgvox: error: interrupted; run again with --resume to finish\n");
       return 130;
     }
     if (failed > 0) {
       throw ParseError(std::to_string(failed) + " of " + std::to_string(scans.size()) +
-                       " scans failed; see " + (bo.outDir / "summary.csv").string());
+                       " scans failed; see " + (summaryDir / "summary.csv").string());
     }
     return 0;
   };

@@ -135,10 +135,18 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   mo.resolution = settings.meshResolution;
   writeMesh(output.path("mesh.ply"), meshTree(tree, mo, console.progress()));
   timings["export"] = watch.seconds();
+  nlohmann::ordered_json report = jobReport(scanPath, scan, rec, settings, timings, console);
+  writeJsonFile(output.path("report.json"), report);
+  return report;
+}
 
+nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Scan& scan,
+                                 const Reconstruction& rec, const JobSettings& settings,
+                                 nlohmann::ordered_json timings, const Console& console) {
+  const CsgTree& tree = rec.tree;
   // The tree is the result: a metric that cannot be computed is a warning
   // in the report, not a failed job.
-  watch = Stopwatch();
+  Stopwatch watch;
   nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
   std::optional<FitMetrics> fit;
   try {
@@ -230,7 +238,6 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   report["metrics"] = std::move(metrics);
   report["warnings"] = std::move(warnings);
   report["timings_s"] = timings;
-  writeJsonFile(output.path("report.json"), report);
   if (fit) {
     console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D",
                      100 * fit->chamfer / fit->diagonal, 100 * fit->rmse / fit->diagonal));

@@ -48,4 +48,12 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
                                 const JobSettings& settings, nlohmann::ordered_json timings,
                                 const Console& console);
 
+/// The report of a finished reconstruction (report.json without writing
+/// it): the settings, counts, the tree's size, its fit metrics against the
+/// scan (a metric that cannot be computed is a warning) and `timings` with
+/// the metrics' seconds added.
+nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Scan& scan,
+                                 const Reconstruction& rec, const JobSettings& settings,
+                                 nlohmann::ordered_json timings, const Console& console);
+
 }  // namespace csgvox::app
