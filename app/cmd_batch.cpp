@@ -27,6 +27,7 @@ struct CommandOptions {
   std::string outDir;
   std::string summaryDir;
   bool list = false;
+  int task = 0;
   int jobs = 0;
   bool resume = false;
   JobSettings job;
@@ -73,6 +74,10 @@ Command setupBatch(CLI::App& app, CommonOptions& common) {
                  "task when tasks of a cluster share the output folder");
   app.add_flag("--list", opt->list,
                "Print the scans the inputs hold, one path per line, and run nothing");
+  app.add_option("--task", opt->task,
+                 "Run only the N-th scan (from 1) of the inputs, in the order --list prints them: "
+                 "one task of a job list or job array")
+      ->check(inRange(1, 1e9));
   CLI::Option_group* job = app.add_option_group("Main job", "Options of every scan's main job");
   addJobOptions(*job, opt->job);
   return [opt, job, &common]() -> int {
@@ -84,8 +89,15 @@ Command setupBatch(CLI::App& app, CommonOptions& common) {
     bo.threadsPerJob = common.threads;
     bo.resume = opt->resume;
     bo.jobArguments = givenOptions(*job);
-    const std::vector<BatchScan> scans = collectScans(opt->inputs, bo.outDir);
+    std::vector<BatchScan> scans = collectScans(opt->inputs, bo.outDir);
     if (scans.empty()) throw IoError("no scan files found in the inputs");
+    if (opt->task > 0) {
+      if (std::size_t(opt->task) > scans.size()) {
+        throw IoError("task " + std::to_string(opt->task) + ": the inputs hold only " +
+                      std::to_string(scans.size()) + " scans");
+      }
+      scans = {scans[std::size_t(opt->task) - 1]};
+    }
     if (opt->list) {
       for (const BatchScan& scan : scans) std::printf("%s\n", scan.label.c_str());
       return 0;

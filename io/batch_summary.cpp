@@ -59,7 +59,8 @@ SummaryRow rowFromReport(const fs::path& reportFile, const std::string& scanPath
     if (metrics.contains("voxel_iou")) row.voxelIou = metrics.at("voxel_iou").get<double>();
     if (seconds < 0.0) {
       seconds = 0.0;
-      for (const auto& [stage, s] : report.value("timings_s", nlohmann::json::object()).items()) {
+      const nlohmann::json timings = report.value("timings_s", nlohmann::json::object());
+      for (const auto& [stage, s] : timings.items()) {
         if (s.is_number()) seconds += s.get<double>();
       }
     }

@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # Writes the job list of a batch for GNU parallel (or any runner that takes
-# one shell command per line): one line per scan, each running the main job
-# on that scan alone and writing its summary row into OUTDIR/rows/<n>/.
+# one shell command per line): line N runs the main job on the N-th scan of
+# the inputs (`csgvox batch INPUT... --task N`), its outputs in the same
+# place as one `csgvox batch` would put them, its summary row in
+# OUTDIR/rows/N/. A task run again skips a finished scan.
 #
-# Usage: joblist.sh OUTDIR INPUT... [-- MAIN-JOB OPTIONS]
-#   then: parallel --jobs 2 < jobs.txt                 (one machine)
-#         parallel --sshloginfile nodes --jobs 1 < jobs.txt   (several)
-#         scripts/cluster/merge.sh OUTDIR
-# Set CSGVOX to the csgvox executable (default: csgvox on the PATH).
+# Usage: joblist.sh OUTDIR INPUT... [-- MAIN-JOB OPTIONS] > jobs.txt
+#   then: parallel --jobs 2 < jobs.txt                          (one machine)
+#         parallel --sshloginfile nodes --jobs 1 < jobs.txt     (several; shared folders)
+#         scripts/cluster/merge.sh OUTDIR "$(wc -l < jobs.txt)"
+# The inputs must not change until every task has run. Set CSGVOX to the
+# csgvox executable (default: csgvox on the PATH).
 set -euo pipefail
 if [[ $# -lt 2 ]]; then
   echo "usage: $0 OUTDIR INPUT... [-- MAIN-JOB OPTIONS]" >&2
@@ -24,12 +27,11 @@ done
 [[ $# -gt 0 ]] && shift
 options=("$@")
 
-quote() { printf '%q' "$1"; }
-n=0
-"$csgvox" batch --list -o "$out" "${inputs[@]}" | while IFS= read -r scan; do
-  n=$((n + 1))
-  line="$(quote "$csgvox") batch $(quote "$scan") -o $(quote "$out")"
-  line+=" --summary-dir $(quote "$out/rows/$n") --jobs 1 --resume --quiet"
-  for o in "${options[@]+"${options[@]}"}"; do line+=" $(quote "$o")"; done
-  echo "$line"
+tasks=$("$csgvox" batch --list -o "$out" "${inputs[@]}" | wc -l)
+common="$(printf '%q' "$csgvox") batch"
+for i in "${inputs[@]}"; do common+=" $(printf '%q' "$i")"; done
+common+=" -o $(printf '%q' "$out") --jobs 1 --resume --quiet"
+for o in "${options[@]+"${options[@]}"}"; do common+=" $(printf '%q' "$o")"; done
+for ((n = 1; n <= tasks; n++)); do
+  echo "$common --task $n --summary-dir $(printf '%q' "$out/rows/$n")"
 done

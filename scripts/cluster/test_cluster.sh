@@ -44,11 +44,11 @@ run_jobs
 "$here/merge.sh" "$work/parallel" 4
 
 # Slurm job array, its tasks run here.
-"$CSGVOX" batch --list -o "$work/slurm" "$in" > "$work/scans.txt"
-tasks=$(wc -l < "$work/scans.txt")
+tasks=$("$CSGVOX" batch --list -o "$work/slurm" "$in" | wc -l)
+[[ $tasks -eq 4 ]] || fail "batch --list gives $tasks scans, expected 4"
 for ((i = 1; i <= tasks; i++)); do
-  SLURM_ARRAY_TASK_ID=$i SLURM_CPUS_PER_TASK=1 bash "$here/slurm.sbatch" "$work/scans.txt" \
-    "$work/slurm" "${options[@]}" || true
+  SLURM_ARRAY_TASK_ID=$i SLURM_CPUS_PER_TASK=1 bash "$here/slurm.sbatch" "$work/slurm" "$in" \
+    -- "${options[@]}" || true
 done
 "$here/merge.sh" "$work/slurm" "$tasks"
 
@@ -67,12 +67,13 @@ def rows(name):
         out = {}
         for line in f:
             r = json.loads(line)
-            out[os.path.basename(r["path"])] = r
+            out[r["path"]] = r
         return out, sum(1 for _ in open(os.path.join(work, name, "summary.jsonl")))
 ref, n = rows("batch")
 assert n == 4 and len(ref) == 4, f"batch wrote {n} rows"
 assert sorted(r["status"] for r in ref.values()) == ["error", "ok", "ok", "ok"], ref
-assert "broken.ply" in ref["broken.ply"]["error"] and "truncated" in ref["broken.ply"]["error"]
+broken = os.path.join(work, "in", "broken.ply")
+assert ref[broken]["error"].startswith(broken + ": truncated"), ref[broken]
 for name in ("parallel", "slurm"):
     got, n = rows(name)
     assert n == 4, f"{name}: {n} rows, expected 4"
@@ -81,11 +82,13 @@ for name in ("parallel", "slurm"):
         g = got[scan]
         for key in ("status", "primitives", "operations", "chamfer", "chamfer_relative", "voxel_iou"):
             assert g[key] == r[key], (name, scan, key, g[key], r[key])
+        # The same place under each output folder, the same message.
+        assert os.path.relpath(g["output"], os.path.join(work, name)) == \
+            os.path.relpath(r["output"], os.path.join(work, "batch")), (g, r)
+        assert g["error"] == r["error"], (g, r)
         if r["status"] == "ok":
             assert filecmp.cmp(os.path.join(r["output"], "tree.json"),
                                os.path.join(g["output"], "tree.json"), shallow=False), (name, scan)
-        else:
-            assert g["error"].split(": ", 1)[1] == r["error"].split(": ", 1)[1], (g, r)
     with open(os.path.join(work, name, "summary.csv")) as f:
         lines = f.read().splitlines()
     assert lines[0].startswith("path,output,status,error,"), lines[0]
