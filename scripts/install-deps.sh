@@ -12,4 +12,6 @@ $SUDO apt-get install -y -q --no-install-recommends \
   libeigen3-dev libtbb-dev libgmp-dev libmpfr-dev \
   nlohmann-json3-dev libcli11-dev libnanoflann-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
-  openscad
+  openscad \
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-setuptools python3-wheel \
+  python3-pip python3-venv parallel
