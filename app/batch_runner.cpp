@@ -290,6 +290,16 @@ BatchOutcome runBatch(const std::vector<BatchScan>& scans, const BatchOptions& o
     }
   }
 
+  // Largest files first: the longest jobs start early instead of running
+  // alone at the end (rows are written as scans finish in any case).
+  std::vector<std::uintmax_t> sizes(scans.size(), 0);
+  for (const std::size_t i : pending) {
+    const std::uintmax_t size = fs::file_size(scans[i].file, ec);
+    sizes[i] = ec ? 0 : size;
+  }
+  std::stable_sort(pending.begin(), pending.end(),
+                   [&](std::size_t a, std::size_t b) { return sizes[a] > sizes[b]; });
+
   const int total = int(scans.size());
   const int jobs = std::min<int>(batchJobs(options.jobs, options.memoryPerJob),
                                  std::max<std::size_t>(pending.size(), 1));

@@ -39,8 +39,9 @@ struct BatchOutcome {
 /// fewer jobs of `memoryPerJob` GiB; at least 1.
 int batchJobs(int requested, double memoryPerJob);
 
-/// Runs the main job on every scan and appends a row per finished scan to
-/// summary.jsonl and summary.csv in options.outDir. A failing scan is a row
+/// Runs the main job on every scan, the largest files first, and appends a
+/// row per finished scan to summary.jsonl and summary.csv in
+/// options.summaryDir (default options.outDir). A failing scan is a row
 /// (status "error" with the job's one-line message, or "crashed"), never an
 /// abort. Progress (done and failed counts, an ETA) goes to stderr unless
 /// the console is quiet.
