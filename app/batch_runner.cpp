@@ -102,10 +102,22 @@ std::string errorLine(const fs::path& log) {
   return lastError.empty() ? last : lastError;
 }
 
-// Whether `folder` holds every file of a finished job.
+// Whether `folder` holds a finished job: a report.json with status "ok"
+// and every file its `outputs` names (every job file without that list).
 bool complete(const fs::path& folder) {
+  std::ifstream in(folder / "report.json", std::ios::binary);
+  if (!in) return false;
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  if (!report.is_object() || report.value("status", std::string()) != "ok") return false;
+  std::vector<std::string> files = jobFiles();
+  if (report.contains("outputs") && report["outputs"].is_array()) {
+    files.clear();
+    for (const auto& name : report["outputs"]) {
+      if (name.is_string()) files.push_back(name.get<std::string>());
+    }
+  }
   std::error_code ec;
-  for (const std::string& f : jobFiles()) {
+  for (const std::string& f : files) {
     if (!fs::is_regular_file(folder / f, ec)) return false;
   }
   return true;

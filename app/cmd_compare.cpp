@@ -1,4 +1,4 @@
-// csgvox compare SCAN [--methods voxel,gp] [--import-gp FIT EXPR] [-o DIR]:
+// csgvox compare SCAN [--methods voxel,hybrid,gp] [--import-gp FIT EXPR] [-o DIR]:
 // several methods on one detection, side by side.
 
 #include <cstdio>
@@ -25,7 +25,7 @@ namespace {
 struct CommandOptions {
   std::string scan;
   std::string outDir;
-  std::string methods = "voxel,gp";
+  std::string methods = "voxel,hybrid,gp";
   std::vector<std::string> importGp;  // FIT EXPR
   JobSettings job;
 };
@@ -92,7 +92,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
   app.add_option("-o,--output", opt->outDir,
                  "Output directory: compare.json and one folder of outputs per method (default: "
                  "<scan folder>/<scan name>-compare/)");
-  app.add_option("--methods", opt->methods, "Methods to run, comma separated: voxel, gp");
+  app.add_option("--methods", opt->methods, "Methods to run, comma separated: voxel, hybrid, gp");
   app.add_option("--import-gp", opt->importGp,
                  "Add the published GP code's own result as a row: its .fit primitive file and "
                  "its expression file (see csgvox import-gp --help)")

@@ -1,4 +1,4 @@
-// csgvox eval TREE.json SCAN [--json]
+// csgvox eval TREE.json SCAN [--json] [--reference TRUE.json]
 
 #include <cstdio>
 #include <iostream>
@@ -19,6 +19,8 @@ struct EvalOptions {
   std::string tree;
   std::string scan;
   bool json = false;
+  std::string reference;
+  int iouResolution = 200;
   FitOptions fit;
 };
 
@@ -32,6 +34,12 @@ Command setupEval(CLI::App& app, CommonOptions& common) {
   app.add_option("--surface-samples", opt->fit.surfaceSamples,
                  "Points sampled on the tree's boundary for distances")
       ->check(inRange(1000, 50'000'000));
+  app.add_option("--reference", opt->reference,
+                 "A reference tree (tree.json, e.g. the part's true tree): adds the volumetric "
+                 "IoU of the two solids");
+  app.add_option("--iou-res", opt->iouResolution,
+                 "Lattice cells along the longest side for the volumetric IoU")
+      ->check(inRange(2, 2000));
   app.add_option("--seed", opt->fit.seed, "Random seed of the boundary sampling")
       ->check(nonNegativeInteger());
   return [opt, &common]() -> int {
@@ -65,6 +73,12 @@ Command setupEval(CLI::App& app, CommonOptions& common) {
       j["normal_agreement"] = m.normalAgreement;
       j["normals_within_10deg"] = m.normalsWithin10Deg;
     }
+    if (!opt->reference.empty()) {
+      common.subject = opt->reference;
+      const CsgTree reference = readTreeJson(std::filesystem::path(opt->reference));
+      j["reference"] = opt->reference;
+      j["iou_reference"] = volumetricIou(tree, reference, opt->iouResolution);
+    }
     if (opt->json) {
       std::cout << j.dump(2) << "\n";
       return 0;
@@ -80,6 +94,10 @@ Command setupEval(CLI::App& app, CommonOptions& common) {
     std::printf("max distance         %.6g  (%.4f %% of D)\n", m.maxDistance,
                 100 * m.maxDistance / d);
     std::printf("within 1 %% of D      %.2f %% of points\n", 100 * m.withinFraction);
+    if (j.contains("iou_reference")) {
+      std::printf("IoU with reference   %.4f  (%s)\n", j["iou_reference"].get<double>(),
+                  opt->reference.c_str());
+    }
     if (m.hasNormals) {
       std::printf("normal agreement     %.4f mean cosine, %.2f %% within 10 degrees\n",
                   m.normalAgreement, 100 * m.normalsWithin10Deg);

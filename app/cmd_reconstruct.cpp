@@ -82,10 +82,13 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     console.info("tree: " + std::to_string(tree.primitiveCount()) + " primitives, " +
                  std::to_string(tree.operationCount()) + " operations, depth " +
                  std::to_string(tree.depth()));
-    writeJob(output, scanPath, scan, rec, opt->job, timings, console);
+    const nlohmann::ordered_json report =
+        writeJob(output, scanPath, scan, rec, opt->job, timings, console);
     output.commit();
-    console.info("wrote tree.json, tree.scad, tree.txt, mesh.ply, report.json in " +
-                 output.folder().string());
+    std::string written;
+    for (const auto& name : report["outputs"])
+      written += (written.empty() ? "" : ", ") + name.get<std::string>();
+    console.info("wrote " + written + " in " + output.folder().string());
     return 0;
   };
 }

@@ -1,17 +1,23 @@
-// csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]
+// csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json,csg,step,png} [--res N] [--scan SCAN]
 
 #include <cstdio>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/console.h"
 #include "app/options.h"
+#include "cad/step_export.h"
+#include "io/csg_writer.h"
 #include "io/errors.h"
 #include "io/file_util.h"
 #include "io/mesh_files.h"
+#include "io/png_file.h"
 #include "io/scad_export.h"
+#include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
 #include "mesh/mesh_export.h"
+#include "render/preview.h"
 
 namespace csgvox::app {
 
@@ -22,6 +28,8 @@ struct RenderOptions {
   std::string output;
   int resolution = MeshOptions{}.resolution;
   int facets = ScadOptions{}.facets;
+  std::string scan;
+  int panelSize = PreviewOptions{}.panelSize;
 };
 
 }  // namespace
@@ -31,13 +39,18 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
   app.add_option("TREE", opt->tree, "CSG tree (tree.json)")->required();
   app.add_option("-o,--output", opt->output,
                  "Output file; its extension picks the format: .ply .stl .obj (mesh), "
-                 ".scad (OpenSCAD), .txt (expression), .json (tree)")
+                 ".scad (OpenSCAD), .txt (expression), .json (tree), .step (exact B-rep), "
+                 ".csg (OpenSCAD CSG, for FreeCAD), .png (preview picture)")
       ->required();
   app.add_option("--res", opt->resolution,
                  "Mesh resolution: grid cells along the longest side of the part")
       ->check(inRange(8, 2048));
   app.add_option("--fn", opt->facets, "OpenSCAD $fn for curved primitives")
       ->check(inRange(3, 1000));
+  app.add_option("--scan", opt->scan,
+                 ".png: also draw this scan's points coloured by their distance to the tree");
+  app.add_option("--size", opt->panelSize, ".png: width and height of each panel, pixels")
+      ->check(inRange(64, 4096));
   return [opt, &common]() -> int {
     Console console(common.quiet);
     common.subject = opt->tree;
@@ -62,9 +75,31 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
       writeTreeText(std::filesystem::path(opt->output), tree);
     } else if (ext == "json") {
       writeTreeJson(std::filesystem::path(opt->output), tree);
+    } else if (ext == "csg") {
+      writeCsg(std::filesystem::path(opt->output), tree);
+    } else if (ext == "step" || ext == "stp") {
+      const BrepSummary s = writeStep(std::filesystem::path(opt->output), tree);
+      char buf[256];
+      std::snprintf(buf, sizeof(buf), "exact solid: %zu solid(s), %zu faces, volume %.6g in %.2f s",
+                    s.solids, s.faces, s.volume, watch.seconds());
+      console.info(buf);
+    } else if (ext == "png") {
+      std::optional<Scan> scan;
+      if (!opt->scan.empty()) {
+        requireNotInput(opt->output, opt->scan);
+        scan = readScan(std::filesystem::path(opt->scan));
+      }
+      MeshOptions mo;
+      mo.resolution = opt->resolution;
+      const TriangleMesh mesh = meshTree(tree, mo, console.progress());
+      PreviewOptions po;
+      po.panelSize = opt->panelSize;
+      writePng(std::filesystem::path(opt->output),
+               renderPreview(tree, mesh, scan ? &scan->cloud : nullptr, po).image);
     } else {
       throw IoError(opt->output +
-                    ": unsupported output format (use .ply, .stl, .obj, .scad, .txt or .json)");
+                    ": unsupported output format (use .ply, .stl, .obj, .scad, .txt, .json, .csg, "
+                    ".step or .png)");
     }
     console.info("wrote " + opt->output);
     return 0;

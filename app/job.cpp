@@ -5,24 +5,29 @@
 #include <optional>
 
 #include "app/options.h"
+#include "cad/step_export.h"
 #include "evolve/fitness.h"
+#include "io/csg_writer.h"
 #include "io/mesh_files.h"
+#include "io/png_file.h"
 #include "io/report.h"
 #include "io/scad_export.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
 #include "mesh/fit_metrics.h"
 #include "mesh/mesh_export.h"
+#include "render/preview.h"
 
 namespace csgvox::app {
 
 void addJobOptions(CLI::App& app, JobSettings& s) {
   app.add_option("--method", s.method,
-                 "How the tree is built: voxel (bounded hypotheses and Wu's two binary "
-                 "optimisations over voxel labels) or gp (the genetic-programming baseline of "
-                 "Fayolle & Pasko 2016: unbounded surfaces and separators combined by a genetic "
-                 "search on the points)")
-      ->check(CLI::IsMember({"voxel", "gp"}));
+                 "How the tree is built: hybrid (the voxel method, then a genetic search on the "
+                 "points repairs its tree where they disagree with it; the default), voxel "
+                 "(bounded hypotheses and Wu's two binary optimisations over voxel labels) or gp "
+                 "(the genetic-programming baseline of Fayolle & Pasko 2016: unbounded surfaces "
+                 "and separators combined by a genetic search on the points)")
+      ->check(CLI::IsMember({"hybrid", "voxel", "gp"}));
   app.add_option("--res", s.resolution, "Voxels along the longest side of the part")
       ->check(inRange(8, 1024));
   app.add_option("--seed", s.seed, "Random seed; the same seed gives the same tree")
@@ -51,6 +56,27 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
                  "optimisations and the genetic search past it keep the best tree found so far")
       ->check(inRange(0.0, 1e6));
   app.add_option("--mesh-res", s.meshResolution, "Resolution of mesh.ply")->check(inRange(8, 2048));
+  HybridOptions& hy = s.pipeline.hybrid;
+  app.add_option("--refine-generations", hy.evolve.maxGenerations,
+                 "hybrid: generations at most of each region's search")
+      ->check(inRange(0, 1e7));
+  app.add_option("--refine-stall", hy.evolve.stallGenerations,
+                 "hybrid: a region's search stops after this many generations without "
+                 "improvement (0: never)")
+      ->check(inRange(0, 1e7));
+  app.add_option("--refine-population", hy.evolve.population,
+                 "hybrid: creatures per generation of each region's search")
+      ->check(inRange(3, 100000));
+  app.add_option("--refine-operations", s.refineOperations,
+                 "hybrid: field of the set operations in the regions' fitness: minmax (the "
+                 "default), sardf (smooth: differs from minmax only at points off the surface, "
+                 "about 7 times slower) or rfunction")
+      ->check(CLI::IsMember({"minmax", "rfunction", "sardf"}));
+  app.add_option("--bad-angle", hy.badAngle,
+                 "hybrid: a point whose normal is further than this from the tree's, in degrees, "
+                 "is badly explained (so is one farther than 1% of the diagonal)")
+      ->check(inRange(0.1, 180.0));
+  app.add_flag("!--no-preview", s.preview, "Do not write preview.png");
   GpOptions& gp = s.pipeline.gp;
   app.add_option("--population", gp.evolve.population, "gp: creatures per generation")
       ->check(inRange(3, 100000));
@@ -86,6 +112,10 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
       ->check(inRange(0, 1e9));
   app.add_flag("!--no-separators", gp.primitives.separators,
                "gp: no separating half-spaces around the curved surfaces");
+  app.add_flag("--partition", gp.partition,
+               "gp: partition the search (one search per maximal clique of the primitive-overlap "
+               "graph, in parallel; the trees merged, then a search on all points seeded with "
+               "them)");
 }
 
 ReconstructOptions pipelineOptions(const JobSettings& s) {
@@ -95,6 +125,9 @@ ReconstructOptions pipelineOptions(const JobSettings& s) {
   o.method = methodFromName(s.method);
   o.labels.method = labelMethodFromName(s.labelMethod);
   o.labels.boundary = s.boundary == "inside" ? BoundaryRule::Inside : BoundaryRule::Centre;
+  o.hybrid.fitness.operations = s.refineOperations == "rfunction" ? SetOperationKind::RFunction
+                                : s.refineOperations == "minmax"  ? SetOperationKind::MinMax
+                                                                  : SetOperationKind::Sardf;
   o.gp.fitness.operations = s.operations == "rfunction" ? SetOperationKind::RFunction
                             : s.operations == "sardf"   ? SetOperationKind::Sardf
                                                         : SetOperationKind::MinMax;
@@ -120,9 +153,38 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobSettings& s
   return model.evaluate(tree);
 }
 
+// tree.step and preview.png. The tree is the result: a solid OpenCASCADE
+// cannot build costs tree.step only (one error line naming the node, a
+// warning in the report), not the job.
+void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
+                     const TriangleMesh& mesh, const JobSettings& settings,
+                     nlohmann::ordered_json& timings, nlohmann::ordered_json& warnings) {
+  Stopwatch watch;
+  if (!stepExportAvailable()) {
+    output.skip("tree.step");
+    warnings.push_back("tree.step: not written: this build has no OpenCASCADE");
+  } else {
+    try {
+      writeStep(output.path("tree.step"), tree);
+    } catch (const CadError& e) {
+      output.skip("tree.step");
+      std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", e.what());
+      warnings.push_back(std::string("tree.step: not written: ") + e.what());
+    }
+  }
+  timings["step"] = watch.seconds();
+  if (!settings.preview) {
+    output.skip("preview.png");
+    return;
+  }
+  watch = Stopwatch();
+  writePng(output.path("preview.png"), renderPreview(tree, mesh, &scan.cloud).image);
+  timings["preview"] = watch.seconds();
+}
+
 }  // namespace
 
-nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::path& scanPath,
+nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& scanPath,
                                 const Scan& scan, const Reconstruction& rec,
                                 const JobSettings& settings, nlohmann::ordered_json timings,
                                 const Console& console) {
@@ -131,23 +193,28 @@ nlohmann::ordered_json writeJob(const OutputSet& output, const std::filesystem::
   writeTreeJson(output.path("tree.json"), tree);
   writeScad(output.path("tree.scad"), tree);
   writeTreeText(output.path("tree.txt"), tree);
+  writeCsg(output.path("tree.csg"), tree);
   MeshOptions mo;
   mo.resolution = settings.meshResolution;
-  writeMesh(output.path("mesh.ply"), meshTree(tree, mo, console.progress()));
+  const TriangleMesh mesh = meshTree(tree, mo, console.progress());
+  writeMesh(output.path("mesh.ply"), mesh);
   timings["export"] = watch.seconds();
-  nlohmann::ordered_json report = jobReport(scanPath, scan, rec, settings, timings, console);
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+  writeCadOutputs(output, scan, tree, mesh, settings, timings, warnings);
+  nlohmann::ordered_json report =
+      jobReport(scanPath, scan, rec, settings, timings, warnings, console, &output);
   writeJsonFile(output.path("report.json"), report);
   return report;
 }
 
 nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Scan& scan,
                                  const Reconstruction& rec, const JobSettings& settings,
-                                 nlohmann::ordered_json timings, const Console& console) {
+                                 nlohmann::ordered_json timings, nlohmann::ordered_json warnings,
+                                 const Console& console, const OutputSet* output) {
   const CsgTree& tree = rec.tree;
   // The tree is the result: a metric that cannot be computed is a warning
   // in the report, not a failed job.
   Stopwatch watch;
-  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
   std::optional<FitMetrics> fit;
   try {
     FitOptions fo;
@@ -173,9 +240,18 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                                        {"time_limit_s", po.timeLimit}};
   if (rec.method == Method::Imported) {
     // The tree was read, not built: only the scan-side settings apply.
-  } else if (rec.method == Method::Voxel) {
+  } else if (rec.method != Method::Gp) {
     parameters["alpha"] = po.construct.subtree.alpha;
     parameters["beta"] = po.construct.unionChoice.beta;
+    if (rec.method == Method::Hybrid) {
+      const HybridOptions& h = po.hybrid;
+      parameters["refine_population"] = h.evolve.population;
+      parameters["refine_generations"] = h.evolve.maxGenerations;
+      parameters["refine_stall"] = h.evolve.stallGenerations;
+      parameters["bad_angle_deg"] = h.badAngle;
+      parameters["refine_operations"] = settings.refineOperations;
+      parameters["refine_voxel_weight"] = h.fitness.voxelWeight;
+    }
   } else {
     const GpOptions& gp = po.gp;
     parameters["population"] = gp.evolve.population;
@@ -190,13 +266,14 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
     parameters["voxel_weight"] = gp.fitness.voxelWeight;
     parameters["rough_points"] = gp.roughPoints;
     parameters["separators"] = gp.primitives.separators;
+    parameters["partition"] = gp.partition;
   }
   report["parameters"] = std::move(parameters);
   const auto& dims = rec.grid.dims();
   report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}}, {"voxel_size", rec.grid.voxelSize()}};
   if (rec.method == Method::Imported) {
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()}};
-  } else if (rec.method == Method::Voxel) {
+  } else if (rec.method != Method::Gp) {
     const ConstructStats& st = rec.construction.stats;
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()},
                         {"hypotheses", rec.hypotheses.candidates.size()},
@@ -207,6 +284,30 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                         {"chosen", st.chosen},
                         {"proved_optimal", st.provedOptimal},
                         {"time_limit_hit", rec.timeLimitHit}};
+    if (rec.method == Method::Hybrid) {
+      const HybridResult& h = rec.hybrid;
+      nlohmann::ordered_json regions = nlohmann::ordered_json::array();
+      for (const HybridRegion& r : h.regions) {
+        regions.push_back({{"bad_points", r.badPoints},
+                           {"points", r.points},
+                           {"members", r.members},
+                           {"library", r.library},
+                           {"generations", r.generations},
+                           {"fitness_before", r.localBefore},
+                           {"fitness_after", r.localAfter},
+                           {"primitives_before", r.primitivesBefore},
+                           {"primitives_after", r.primitivesAfter},
+                           {"replaced", r.replaced},
+                           {"seconds", r.seconds}});
+      }
+      report["refinement"] = {{"bad_points", h.badPoints},
+                              {"regions", std::move(regions)},
+                              {"subtrees_replaced", h.replaced},
+                              {"fitness_before", h.before.total},
+                              {"fitness_after", h.after.total},
+                              {"primitives_before", h.primitivesBefore},
+                              {"primitives_after", h.primitivesAfter}};
+    }
   } else {
     const EvolveResult& s = rec.gp.search;
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()},
@@ -217,6 +318,21 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                         {"stop", evolveStopName(s.stop)},
                         {"clipped_to_scan_box", rec.gp.clipped},
                         {"time_limit_hit", rec.timeLimitHit}};
+    if (rec.gp.partitioned) {
+      const PartitionedResult& p = *rec.gp.partitioned;
+      nlohmann::ordered_json parts = nlohmann::ordered_json::array();
+      for (const PartitionRun& run : p.partitions) {
+        parts.push_back({{"primitives", run.primitives.size()},
+                         {"points", run.points},
+                         {"generations", run.generations},
+                         {"nodes", run.nodes},
+                         {"seconds", run.seconds}});
+      }
+      report["partitioning"] = {
+          {"partitions", std::move(parts)},          {"merged_nodes", p.mergedNodes},
+          {"partition_seconds", p.partitionSeconds}, {"search_seconds", p.searchSeconds},
+          {"merge_seconds", p.mergeSeconds},         {"final_seconds", p.finalSeconds}};
+    }
   }
   report["tree"] = {{"primitives", tree.primitiveCount()},
                     {"operations", tree.operationCount()},
@@ -237,6 +353,12 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                         {"points", scan.cloud.size()}};
   report["metrics"] = std::move(metrics);
   report["warnings"] = std::move(warnings);
+  nlohmann::ordered_json outputs = nlohmann::ordered_json::array();
+  for (const std::string& name : jobFiles()) {
+    if (output && (name == "report.json" || std::filesystem::exists(output->path(name))))
+      outputs.push_back(name);
+  }
+  report["outputs"] = std::move(outputs);
   report["timings_s"] = timings;
   if (fit) {
     console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D",

@@ -11,6 +11,7 @@
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
 //   --res         ReconstructOptions::resolution (default 64)
+//   --method      hybrid (default), voxel or gp
 //   --models      comma-separated model names (default: all of the CSV)
 //   --samples     random points of the IoU estimate (default 200000)
 //   --time-limit  ReconstructOptions::timeLimit in seconds (default 0: none);
@@ -61,6 +62,7 @@ struct Options {
   int resolution = 64;
   int iouSamples = 200000;
   double timeLimit = 0.0;
+  Method method = Method::Hybrid;
   std::vector<std::string> models;
 };
 
@@ -158,6 +160,7 @@ Result runModel(const Options& opt, const std::string& model) {
     ro.resolution = opt.resolution;
     ro.seed = 1;
     ro.timeLimit = opt.timeLimit;
+    ro.method = opt.method;
     const auto t0 = std::chrono::steady_clock::now();
     const Reconstruction rec = reconstruct(scan, ro);
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -319,7 +322,7 @@ std::vector<std::string> splitList(const std::string& s) {
 int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
-               "[--samples S] [--time-limit T]\n",
+               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp]\n",
                argv0);
   return 2;
 }
@@ -343,6 +346,12 @@ int main(int argc, char** argv) {
       opt.iouSamples = std::atoi(argv[++i]);
     } else if (arg == "--time-limit" && hasValue) {
       opt.timeLimit = std::atof(argv[++i]);
+    } else if (arg == "--method" && hasValue) {
+      try {
+        opt.method = methodFromName(argv[++i]);
+      } catch (const std::invalid_argument&) {
+        return usage(argv[0]);
+      }
     } else if (!arg.empty() && arg[0] != '-' && opt.dir.empty()) {
       opt.dir = arg;
     } else {
@@ -369,9 +378,9 @@ int main(int argc, char** argv) {
   if (opt.timeLimit > 0.0) std::snprintf(limitText, sizeof limitText, "%g s", opt.timeLimit);
   std::printf(
       "InverseCSG benchmark %s: %zu models, %zu points per mesh, noise %.4f D, res %d, "
-      "time limit %s\n",
+      "method %s, time limit %s\n",
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
-      limitText);
+      std::string(methodName(opt.method)).c_str(), limitText);
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
@@ -414,8 +423,8 @@ int main(int argc, char** argv) {
   }
 
   const std::size_t n = opt.models.size();
-  std::printf("\nsummary (%zu models, %zu points, noise %.4f D, res %d)\n", n, opt.points,
-              opt.noise, opt.resolution);
+  std::printf("\nsummary (%zu models, %zu points, noise %.4f D, res %d, method %s)\n", n,
+              opt.points, opt.noise, opt.resolution, std::string(methodName(opt.method)).c_str());
   std::printf("  reconstructed (Ok):            %zu / %zu\n", ok, n);
   std::printf("  IoU measured:                  %zu (closed meshes among the reconstructed)\n",
               withIou);

@@ -521,6 +521,74 @@ def part_funnel():
         thinnest="6 mm walls (bowl, normal to the cone, and spout)")
 
 
+# ----------------------------------------------------------------------------
+# Thin-feature parts (data/thin/): features at or below a voxel at res 64,
+# which only the points can show.
+
+def part_slotted_plate():
+    plate = box_span("plate", (-30, -20, 0), (30, 20, 8))
+    slot = box_span("slot", (-0.3, -12, -2), (0.3, 12, 10))
+    hole = cylinder_between("hole", (18, 0, -2), (18, 0, 10), 5.0)
+    return dict(
+        root=difference(plate, slot, hole),
+        title="Plate with a saw cut",
+        description="Plate 60 x 40 x 8 with a 0.6 mm wide, 24 mm long through saw cut (a voxel is "
+                    "0.97 mm at res 64) and a 10 mm hole.",
+        features="slot narrower than a voxel",
+        thinnest="0.6 mm slot")
+
+
+def part_thin_tray():
+    outer = box_span("outer", (-30, -20, 0), (30, 20, 20))
+    inner = box_span("inner", (-29, -19, 1), (29, 19, 22))
+    return dict(
+        root=difference(outer, inner),
+        title="Open tray with 1 mm walls",
+        description="Open box 60 x 40 x 20 with 1 mm walls and floor (a voxel is 0.97 mm at "
+                    "res 64).",
+        features="walls one voxel thick",
+        thinnest="1 mm walls",
+        tangent=[("outer", "inner")])
+
+
+def part_pin_base():
+    base = box_span("base", (-15, -15, 0), (15, 15, 5))
+    pin = cylinder_between("pin", (0, 0, 4), (0, 0, 47), 1.0)
+    tip = cone_between("tip", (0, 0, 45), (0, 0, 52), 3.5, 0.0)
+    return dict(
+        root=union(base, pin, tip),
+        title="Base with a thin pin and a conical tip",
+        description="Base 30 x 30 x 5 with a 2 mm pin 40 mm long ending in a 7 mm cone "
+                    "(a spike head, 7 mm across at its base; a voxel is 0.8 mm at res 64).",
+        features="thin rod (2.6 voxels across) with a cone end",
+        thinnest="2 mm pin")
+
+
+def part_sheet_bracket():
+    t = 1.5
+    base = box_span("base", (-30, -20, 0), (30, 20, t))
+    wall = box_span("wall", (-30, -20, 0), (30, -20 + t, 30))
+    holes = [cylinder_between(f"hole_{i + 1}", (x, 5, -2), (x, 5, t + 2), 5.0)
+             for i, x in enumerate((-15, 15))]
+    slot = box_span("wall_slot", (-10, -22, 15), (10, -17, 20))
+    return dict(
+        root=difference(union(base, wall), *holes, slot),
+        title="Sheet-metal bracket",
+        description="L bracket bent from 1.5 mm sheet (1.5 voxels at res 64): base 60 x 40 with "
+                    "two 10 mm holes, wall 60 x 30 with a 20 x 5 slot.",
+        features="walls of 1-2 voxels; holes and a slot through thin sheet",
+        thinnest="1.5 mm sheet",
+        tangent=[("base", "wall")])
+
+
+THIN_PARTS = [
+    ("slotted_plate", part_slotted_plate),
+    ("thin_tray", part_thin_tray),
+    ("pin_base", part_pin_base),
+    ("sheet_bracket", part_sheet_bracket),
+]
+
+
 PARTS = [
     ("plate_holes", part_plate_holes),
     ("l_bracket", part_l_bracket),
@@ -1228,9 +1296,15 @@ def main(argv=None):
     ap.add_argument("--points", type=int, default=20000, help="Monte-Carlo points per part")
     ap.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
     ap.add_argument("--only", nargs="*", help="only these parts")
+    ap.add_argument("--thin", action="store_true",
+                    help="the thin-feature parts instead, into <out>/thin/ (no README)")
     args = ap.parse_args(argv)
 
-    parts = [(n, fn()) for n, fn in PARTS if not args.only or n in args.only]
+    catalogue = THIN_PARTS if args.thin else PARTS
+    if args.thin:
+        args.out = os.path.join(args.out, "thin")
+        args.no_readme = True
+    parts = [(n, fn()) for n, fn in catalogue if not args.only or n in args.only]
     results = []
     failures = []
     header = (f"{'part':<18} {'prims':>5} {'ops':>3} {'depth':>5}  {'bounding box (mm)':<22} "
@@ -1261,7 +1335,7 @@ def main(argv=None):
     for (name, _), r in zip(parts, results):
         for t in r["types"]:
             types_in.setdefault(t, []).append(name)
-    if not args.only:
+    if not args.only and not args.thin:
         for t in ("box", "cylinder", "cone", "sphere", "torus", "halfspace"):
             if len(types_in.get(t, [])) < 2:
                 failures.append(f"primitive type {t} appears in fewer than two parts")

@@ -78,6 +78,15 @@ OutputSet::~OutputSet() {
 
 fs::path OutputSet::path(const std::string& name) const { return staging_ / name; }
 
+void OutputSet::skip(const std::string& name) {
+  const auto it = std::find(names_.begin(), names_.end(), name);
+  if (it == names_.end()) return;
+  names_.erase(it);
+  skipped_.push_back(name);
+  std::error_code ec;
+  fs::remove(staging_ / name, ec);
+}
+
 void OutputSet::commit() {
   std::error_code ec;
   for (const std::string& name : names_) {
@@ -101,6 +110,7 @@ void OutputSet::commit() {
       throw IoError((folder_ / name).string() + ": cannot be written (" + ec.message() + ")");
     }
   }
+  for (const std::string& name : skipped_) fs::remove(folder_ / name, ec);
   committed_ = true;
   fs::remove_all(staging_, ec);
 }

@@ -37,6 +37,10 @@ class OutputSet {
   const std::filesystem::path& folder() const { return folder_; }
   /// Where to write the output `name` (one of the names given) now.
   std::filesystem::path path(const std::string& name) const;
+  /// The output `name` is not written this time (an optional output, or one
+  /// whose step failed): commit() neither expects it nor leaves an older
+  /// file of that name in the folder beside the new ones.
+  void skip(const std::string& name);
   /// Moves every staged file into the folder.
   /// @throw IoError when a file named at construction was not written or
   ///        cannot be moved.
@@ -45,6 +49,7 @@ class OutputSet {
  private:
   std::filesystem::path folder_;
   std::vector<std::string> names_;
+  std::vector<std::string> skipped_;
   std::filesystem::path staging_;
   bool freshFolder_ = false;  ///< the folder did not exist: staging_ becomes it
   bool committed_ = false;

@@ -11,19 +11,27 @@ GpResult runGp(const PointCloud& scan, std::span<const Surface> surfaces, const 
   GpResult out;
   out.primitives = gpPrimitives(scan, surfaces, options.primitives);
   const double diagonal = scan.diagonal();
-  const FitnessModel model(scan.points, scan.normals, diagonal, out.primitives.library,
-                           options.fitness, target);
-  std::optional<FitnessModel> rough;
-  if (options.roughPoints > 0 && scan.size() > options.roughPoints) {
-    std::vector<Vec3> points, normals;
-    for (const std::uint32_t i :
-         spreadSample(scan.size(), options.roughPoints, options.evolve.seed)) {
-      points.push_back(scan.points[i]);
-      normals.push_back(scan.normals[i]);
+  if (options.partition) {
+    PartitionOptions po = options.partitioning;
+    po.roughPoints = options.roughPoints;
+    out.partitioned = evolvePartitioned(scan.points, scan.normals, diagonal, out.primitives.library,
+                                        options.fitness, options.evolve, po, onGeneration, target);
+    out.search = out.partitioned->search;
+  } else {
+    const FitnessModel model(scan.points, scan.normals, diagonal, out.primitives.library,
+                             options.fitness, target);
+    std::optional<FitnessModel> rough;
+    if (options.roughPoints > 0 && scan.size() > options.roughPoints) {
+      std::vector<Vec3> points, normals;
+      for (const std::uint32_t i :
+           spreadSample(scan.size(), options.roughPoints, options.evolve.seed)) {
+        points.push_back(scan.points[i]);
+        normals.push_back(scan.normals[i]);
+      }
+      rough.emplace(points, normals, diagonal, out.primitives.library, options.fitness, target);
     }
-    rough.emplace(points, normals, diagonal, out.primitives.library, options.fitness, target);
+    out.search = evolve(model, {}, options.evolve, onGeneration, rough ? &*rough : nullptr);
   }
-  out.search = evolve(model, {}, options.evolve, onGeneration, rough ? &*rough : nullptr);
   out.tree = out.search.best;
   const Aabb& b = out.primitives.clipBox;
   const Aabb bounds = out.tree.bounds();

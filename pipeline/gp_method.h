@@ -5,12 +5,14 @@
 /// search of evolve/genetic_search.h.
 
 #include <cstddef>
+#include <optional>
 #include <span>
 
 #include "core/point_cloud.h"
 #include "core/surface.h"
 #include "evolve/fitness.h"
 #include "evolve/genetic_search.h"
+#include "evolve/partitioned_search.h"
 #include "pipeline/gp_primitives.h"
 
 namespace csgvox {
@@ -22,6 +24,9 @@ struct GpOptions {
   GpPrimitiveOptions primitives;  ///< separators and the clip box
   std::size_t roughPoints = 20000;  ///< generations use at most this many points (an even spread)
                                     ///< until the search stalls, then all (0: always all)
+  bool partition = false;           ///< Friedrich's partitioning: a search per maximal clique of
+                                    ///< the primitive-overlap graph, merged, then a seeded search
+  PartitionOptions partitioning;  ///< its hulls and final search (roughPoints is taken from above)
 };
 
 /// Result of runGp().
@@ -29,8 +34,9 @@ struct GpResult {
   CsgTree tree;             ///< the best tree, bounded (see `clipped`)
   GpPrimitives primitives;  ///< the library the search combined
   EvolveResult search;      ///< the search's own figures (fitness on all points)
-  bool clipped = false;     ///< the best tree reached out of the clip box (unbounded, or a long
-                            ///< cylinder or cone) and was intersected with it
+  std::optional<PartitionedResult> partitioned;  ///< the partitions' figures (with `partition`)
+  bool clipped = false;  ///< the best tree reached out of the clip box (unbounded, or a long
+                         ///< cylinder or cone) and was intersected with it
 };
 
 /// Runs the baseline on an oriented scan and its fitted surfaces.

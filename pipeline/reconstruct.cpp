@@ -55,6 +55,8 @@ std::string_view methodName(Method method) {
       return "gp";
     case Method::Imported:
       return "import-gp";
+    case Method::Hybrid:
+      return "hybrid";
     case Method::Voxel:
       break;
   }
@@ -64,7 +66,8 @@ std::string_view methodName(Method method) {
 Method methodFromName(std::string_view name) {
   if (name == "voxel") return Method::Voxel;
   if (name == "gp") return Method::Gp;
-  throw std::invalid_argument("unknown method '" + std::string(name) + "' (voxel or gp)");
+  if (name == "hybrid") return Method::Hybrid;
+  throw std::invalid_argument("unknown method '" + std::string(name) + "' (hybrid, voxel or gp)");
 }
 
 namespace {
@@ -140,8 +143,41 @@ void gpMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOpti
                 "library (%zu separators)",
                 s.generations, std::string(evolveStopName(s.stop)).c_str(), s.evaluations,
                 s.fitness.total, out.gp.primitives.library.size(), out.gp.primitives.separators);
-  clock.finish(summary);
+  std::string note = summary;
+  if (out.gp.partitioned) {
+    const PartitionedResult& p = *out.gp.partitioned;
+    std::snprintf(summary, sizeof(summary),
+                  "; %zu partitions searched in %.2f s, merged to %zu nodes, final search %.2f s",
+                  p.partitions.size(), p.searchSeconds, p.mergedNodes, p.finalSeconds);
+    note += summary;
+  }
+  clock.finish(note);
   out.tree = out.gp.tree;
+  out.voxels = solidVoxels(out.tree, out.grid);
+}
+
+// The hybrid method's refinement of the voxel tree on the points.
+void hybridMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
+                  StageClock& clock, Clock::time_point deadline) {
+  clock.start("refine");
+  HybridOptions ho = options.hybrid;
+  ho.evolve.seed = options.seed;
+  double left = 0.0;
+  if (deadline != Clock::time_point::max()) {
+    left = std::max(std::chrono::duration<double>(deadline - Clock::now()).count(), 1e-3);
+  }
+  out.voxelTree = out.tree;
+  out.hybrid =
+      refineTree(scan, out.tree, out.hypotheses.candidates, out.grid, out.labels.inside, ho, left);
+  const HybridResult& h = out.hybrid;
+  char summary[200];
+  std::snprintf(summary, sizeof(summary),
+                "%zu badly explained points, %zu regions, %zu subtrees replaced, fitness %.6g -> "
+                "%.6g, primitives %zu -> %zu",
+                h.badPoints, h.regions.size(), h.replaced, h.before.total, h.after.total,
+                h.primitivesBefore, h.primitivesAfter);
+  clock.finish(summary);
+  out.tree = h.tree;
   out.voxels = solidVoxels(out.tree, out.grid);
 }
 
@@ -163,7 +199,7 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.grid = std::move(found.grid);
   out.hypotheses = std::move(found.hypotheses);
   out.timeLimitHit = Clock::now() > deadline;
-  if (options.method == Method::Voxel && options.memoryLimit > 0) {
+  if (options.method != Method::Gp && options.memoryLimit > 0) {
     const double perVoxel =
         3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
     const double need = perVoxel * double(out.grid.voxelCount());
@@ -196,6 +232,9 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
     gpMethod(out, scan, options, clock, deadline, progress);
   } else {
     voxelMethod(out, scan, options, clock, deadline, report);
+    if (options.method == Method::Hybrid && !out.tree.empty()) {
+      hybridMethod(out, scan, options, clock, deadline);
+    }
   }
   if (out.tree.empty()) {
     out.status = Reconstruction::Status::NoCombination;

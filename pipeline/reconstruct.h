@@ -4,7 +4,8 @@
 ///
 /// Stages: detect surfaces (RANSAC) → refine (Ceres) → regularise → voxel
 /// grid over the minimal oriented box → bounded hypotheses → voxel labels →
-/// description sets → Wu's two optimisations and the simplified tree.
+/// description sets → Wu's two optimisations and the simplified tree → (hybrid)
+/// the genetic search repairs the tree where the points disagree with it.
 
 #include <functional>
 #include <span>
@@ -17,6 +18,7 @@
 #include "optimize/csg_construction.h"
 #include "pipeline/detect_and_fit.h"
 #include "pipeline/gp_method.h"
+#include "pipeline/hybrid_method.h"
 #include "primitives/hypotheses.h"
 #include "primitives/surface_detection.h"
 #include "voxel/description_sets.h"
@@ -27,25 +29,28 @@ namespace csgvox {
 
 /// How the tree is built from the detected surfaces.
 enum class Method {
+  Hybrid,    ///< the voxel method, then the genetic search repairs its tree where the points
+             ///< disagree (pipeline/hybrid_method.h)
   Voxel,     ///< Wu et al.'s bounded hypotheses and two binary optimisations over voxels
   Gp,        ///< the genetic-programming baseline (Fayolle & Pasko 2016) on the points
   Imported,  ///< not built here: a tree read from a file (`compare --import-gp`)
 };
 
-/// "voxel", "gp" or "import-gp".
+/// "hybrid", "voxel", "gp" or "import-gp".
 std::string_view methodName(Method method);
-/// Inverse of methodName for the methods that build trees ("voxel", "gp").
+/// Inverse of methodName for the methods that build trees ("hybrid", "voxel", "gp").
 /// @throw std::invalid_argument for other names.
 Method methodFromName(std::string_view name);
 
 /// Options of reconstruct().
 struct ReconstructOptions {
-  Method method = Method::Voxel;  ///< how the tree is built
-  int resolution = 64;            ///< voxels along the longest side of the part's oriented box
-  std::uint64_t seed = 1;         ///< seeds detection and hypotheses; same seed, same tree
-  DetectOptions detect;           ///< surface detection (its seed is replaced by `seed`)
-  LabelOptions labels;            ///< voxel labelling
+  Method method = Method::Hybrid;  ///< how the tree is built
+  int resolution = 64;             ///< voxels along the longest side of the part's oriented box
+  std::uint64_t seed = 1;          ///< seeds detection and hypotheses; same seed, same tree
+  DetectOptions detect;            ///< surface detection (its seed is replaced by `seed`)
+  LabelOptions labels;             ///< voxel labelling
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
+  HybridOptions hybrid;        ///< hybrid method: the refinement (its seed is set from `seed`)
   GpOptions gp;                ///< gp method: the search (its seed and time limit are set from
                                ///< `seed` and `timeLimit`)
   /// Wall-clock seconds for the whole call (0: none). Detection past the
@@ -88,6 +93,8 @@ struct Reconstruction {
   Method method = Method::Voxel;   ///< the method that built `tree`
   Construction construction;       ///< voxel method: the optimisations' result
   GpResult gp;                     ///< gp method: the search's result
+  HybridResult hybrid;             ///< hybrid method: what the refinement changed
+  CsgTree voxelTree;               ///< hybrid method: the voxel stage's tree it refined
   VoxelSet voxels;                 ///< voxels whose centre `tree` holds
   std::vector<StageTime> timings;  ///< in pipeline order
   bool timeLimitHit = false;       ///< the limit stopped a search early

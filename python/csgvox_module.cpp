@@ -136,7 +136,7 @@ PYBIND11_MODULE(csgvox, m) {
   m.doc() =
       "csgvox: from a 3D scan of a mechanical part to a compact, editable CSG tree.\n\n"
       "read_scan(path) -> (points, normals); reconstruct(points, normals=None, res=64, seed=1,\n"
-      "method='voxel') -> Result(.tree, .report); Tree.to_json(), to_scad(), to_text(),\n"
+      "method=...) -> Result(.tree, .report); Tree.to_json(), to_scad(), to_text(),\n"
       "evaluate(points), Tree.from_json(text).";
   m.attr("__version__") = "0.1.0";
 
@@ -209,7 +209,7 @@ PYBIND11_MODULE(csgvox, m) {
       "ParseError with the file's name and the problem.");
 
   m.def("reconstruct", &reconstructArrays, py::arg("points"), py::arg("normals") = py::none(),
-        py::arg("res") = 64, py::arg("seed") = 1, py::arg("method") = "voxel",
+        py::arg("res") = 64, py::arg("seed") = 1, py::arg("method") = app::JobSettings().method,
         py::arg("label") = "winding", py::arg("label_boundary") = "centre",
         py::arg("time_limit") = 0.0,
         "The main job on an (N, 3) array of points with outward normals (estimated when\n"

@@ -2,6 +2,8 @@
 /// The bundled ground-truth parts (data/<part>/tree.json), for tests that
 /// loop over every part.
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <string>
@@ -24,9 +26,11 @@ inline std::vector<std::string> partNames() {
   return names;
 }
 
-/// A fresh empty temporary directory for one test.
+/// A fresh empty temporary directory for one test, private to this process
+/// (two checkouts running the same test at once do not share it).
 inline std::filesystem::path freshTempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("csgvox-test-" + name);
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("csgvox-test-" + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -49,6 +49,28 @@ TEST_F(Cli, GpKeepsItsBestTreeAtTheTimeLimit) {
   EXPECT_GE(report["metrics"]["voxel_iou"].get<double>(), 0.9);
 }
 
+// Friedrich's partitioning: the box's faces give its eight corners as
+// partitions, and the searches on all points join them into the exact tree.
+TEST_F(Cli, GpPartitionedFindsTheExactCubeAndReportsItsPartitions) {
+  const RunResult r =
+      run(kCube + " --method gp --partition -q --seed 1 -o " + (dir_ / "p").string(), dir_, 300);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json report = readJson(dir_ / "p" / "report.json");
+  EXPECT_TRUE(report["parameters"]["partition"].get<bool>());
+  EXPECT_EQ(report["tree"]["primitives"], 6) << slurp(dir_ / "p" / "tree.txt");
+  EXPECT_EQ(report["tree"]["operations"], 5) << slurp(dir_ / "p" / "tree.txt");
+  EXPECT_GE(report["metrics"]["voxel_iou"].get<double>(), 0.99);
+  const nlohmann::json& parts = report["partitioning"]["partitions"];
+  ASSERT_EQ(parts.size(), 8u);
+  std::size_t points = 0;
+  for (const nlohmann::json& p : parts) {
+    EXPECT_EQ(p["primitives"], 3);
+    points += p["points"].get<std::size_t>();
+  }
+  // Each point lies on one face, and each face is in four corners.
+  EXPECT_EQ(points, 4 * report["input"]["points"].get<std::size_t>());
+}
+
 TEST_F(Cli, GpOptionsAreChecked) {
   EXPECT_EQ(run(kCube + " --method gp --population 2", dir_).code, 2);
   EXPECT_EQ(run(kCube + " --method gp --crossover 1.5", dir_).code, 2);
@@ -62,21 +84,22 @@ TEST_F(Cli, CompareShowsEveryMethodAndTheImportedTree) {
                               "cube_expr.txt -o " + (dir_ / "cmp").string(),
                           dir_, 600);
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* method : {"voxel", "gp", "import-gp"}) {
+  for (const char* method : {"voxel", "hybrid", "gp", "import-gp"}) {
     EXPECT_NE(r.out.find(method), std::string::npos) << r.out;
     EXPECT_TRUE(fs::exists(dir_ / "cmp" / method / "tree.json")) << method;
     EXPECT_TRUE(fs::exists(dir_ / "cmp" / method / "report.json")) << method;
   }
   const nlohmann::json summary = readJson(dir_ / "cmp" / "compare.json");
-  ASSERT_EQ(summary["rows"].size(), 3u);
+  ASSERT_EQ(summary["rows"].size(), 4u);
   for (const auto& row : summary["rows"]) {
     EXPECT_GE(row["voxel_iou"].get<double>(), 0.95) << row.dump();
     EXPECT_GT(row["primitives"].get<int>(), 0);
   }
   // The published code's tree for the cube is the cube (with redundant nodes).
-  EXPECT_EQ(summary["rows"][2]["method"], "import-gp");
-  EXPECT_GT(summary["rows"][2]["operations"].get<int>(),
-            summary["rows"][1]["operations"].get<int>());
+  EXPECT_EQ(summary["rows"][1]["method"], "hybrid");
+  EXPECT_EQ(summary["rows"][3]["method"], "import-gp");
+  EXPECT_GT(summary["rows"][3]["operations"].get<int>(),
+            summary["rows"][2]["operations"].get<int>());
   EXPECT_EQ(run("compare " + kCube + " --methods voxel,magic", dir_).code, 1);
 }
 

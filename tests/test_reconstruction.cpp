@@ -141,8 +141,9 @@ TEST(Reconstruction, ReportsEveryStageInOrder) {
         (done ? finished : started).emplace_back(stage);
       });
   ASSERT_TRUE(r.ok()) << r.message;
-  const std::vector<std::string> stages{"detect", "hypotheses", "labels", "description_sets",
-                                        "optimisation"};
+  // The default (hybrid) method ends with the refinement on the points.
+  const std::vector<std::string> stages{"detect",           "hypotheses",   "labels",
+                                        "description_sets", "optimisation", "refine"};
   EXPECT_EQ(started, stages);
   EXPECT_EQ(finished, stages);
   ASSERT_EQ(r.timings.size(), stages.size());

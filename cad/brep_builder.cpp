@@ -1,0 +1,406 @@
+#include "cad/brep_builder.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepAlgoAPI_Common.hxx>
+#include <BRepAlgoAPI_Cut.hxx>
+#include <BRepAlgoAPI_Fuse.hxx>
+#include <BRepBndLib.hxx>
+#include <BRepCheck_Analyzer.hxx>
+#include <BRepGProp.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <Bnd_Box.hxx>
+#include <GProp_GProps.hxx>
+#include <Poly_Triangulation.hxx>
+#include <ShapeUpgrade_UnifySameDomain.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopLoc_Location.hxx>
+#include <TopTools_ListOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <random>
+#include <sstream>
+
+#include "core/export_extent.h"
+#include "io/tree_names.h"
+
+namespace csgvox::cad {
+namespace {
+
+gp_Pnt pnt(const Vec3& v) { return gp_Pnt(v.x(), v.y(), v.z()); }
+gp_Dir dir(const Vec3& v) { return gp_Dir(v.x(), v.y(), v.z()); }
+
+// An exact rotation (orthonormal, right-handed) closest to the frame's axes:
+// the tree keeps them orthonormal only to about 1e-6.
+Mat3 exactRotation(Mat3 axes) {
+  if (axes.determinant() < 0.0) axes.col(2) = -axes.col(2);  // a centred box is symmetric
+  return Eigen::Quaterniond(axes).normalized().toRotationMatrix();
+}
+
+TopoDS_Shape cube(const Mat3& frame, const Vec3& center, const Vec3& size) {
+  const Mat3 r = exactRotation(frame);
+  const Vec3 corner = center - r * (0.5 * size);
+  const gp_Ax2 ax(pnt(corner), dir(r.col(2)), dir(r.col(0)));
+  return BRepPrimAPI_MakeBox(ax, size.x(), size.y(), size.z()).Shape();
+}
+
+Aabb grownBox(Aabb box, double margin) {
+  box.min.array() -= margin;
+  box.max.array() += margin;
+  return box;
+}
+
+TopoDS_Shape cube(const StandInCube& c) { return cube(c.frame, c.center, Vec3::Constant(c.edge)); }
+
+struct Builder {
+  const StepOptions& options;
+  const std::unordered_map<const Node*, std::string>& names;
+  Aabb extent;
+  double bigEdge = 0.0;
+
+  TopoDS_Shape primitive(const Primitive& p) const {
+    if (const auto* h = p.as<HalfSpace>()) return cube(halfSpaceCube(*h, extent, bigEdge));
+    if (const auto* b = p.as<Box>()) return cube(b->axes, b->center, 2.0 * b->halfSize);
+    if (const auto* c = p.as<Cylinder>()) {
+      const gp_Ax2 ax(pnt(c->center - 0.5 * c->height * c->axis), dir(c->axis));
+      return BRepPrimAPI_MakeCylinder(ax, c->radius, c->height).Shape();
+    }
+    if (const auto* c = p.as<Cone>()) {
+      const gp_Ax2 ax(pnt(c->center - 0.5 * c->height * c->axis), dir(c->axis));
+      if (std::abs(c->radiusBottom - c->radiusTop) <= 1e-12 * (c->radiusBottom + c->radiusTop)) {
+        return BRepPrimAPI_MakeCylinder(ax, c->radiusBottom, c->height).Shape();
+      }
+      return BRepPrimAPI_MakeCone(ax, c->radiusBottom, c->radiusTop, c->height).Shape();
+    }
+    if (const auto* s = p.as<Sphere>())
+      return BRepPrimAPI_MakeSphere(pnt(s->center), s->radius).Shape();
+    const Torus& t = std::get<Torus>(p.shape());
+    return BRepPrimAPI_MakeTorus(gp_Ax2(pnt(t.center), dir(t.axis)), t.majorRadius, t.minorRadius)
+        .Shape();
+  }
+
+  static std::string pathText(const NodePath& path) {
+    std::string s = "root";
+    for (std::size_t i : path) s += "/" + std::to_string(i);
+    return s;
+  }
+
+  std::string describe(const Node& n) const {
+    if (n.kind == NodeKind::Primitive) return names.at(&n);
+    return std::string(nodeKindName(n.kind)) + " of " + std::to_string(n.children.size());
+  }
+
+  std::string nodeText(const Node& n, const NodePath& path) const {
+    std::string s =
+        "the " + std::string(nodeKindName(n.kind)) + " at node " + pathText(path) + " (";
+    for (std::size_t i = 0; i < n.children.size(); ++i) {
+      s += (i ? ", " : "") + describe(*n.children[i]);
+    }
+    return s + ")";
+  }
+
+  static bool hasSolid(const TopoDS_Shape& s) {
+    return !s.IsNull() && TopExp_Explorer(s, TopAbs_SOLID).More();
+  }
+
+  // Runs one boolean; the result, std::nullopt when it is empty.
+  std::optional<TopoDS_Shape> boolean(BRepAlgoAPI_BooleanOperation& op, const TopoDS_Shape& a,
+                                      const TopTools_ListOfShape& tools, const Node& n,
+                                      const NodePath& path) const {
+    TopTools_ListOfShape args;
+    args.Append(a);
+    op.SetArguments(args);
+    op.SetTools(tools);
+    op.SetNonDestructive(true);
+    if (options.fuzzy > 0.0) op.SetFuzzyValue(options.fuzzy * extent.diagonal());
+    op.SetRunParallel(false);
+    op.SetToFillHistory(false);
+    op.Build();
+    if (op.HasErrors() || !op.IsDone()) {
+      std::ostringstream why;
+      op.DumpErrors(why);
+      std::string text = why.str();
+      for (char& c : text) {
+        if (c == '\n' || c == '\r') c = ' ';
+      }
+      throw CadError("OpenCASCADE cannot compute " + nodeText(n, path) +
+                     (text.empty() ? std::string() : ": " + text));
+    }
+    const TopoDS_Shape r = op.Shape();
+    if (!hasSolid(r)) return std::nullopt;
+    return r;
+  }
+
+  // The node's solid; std::nullopt when it is empty.
+  std::optional<TopoDS_Shape> node(const Node& n, NodePath& path) const {
+    try {
+      return nodeUnchecked(n, path);
+    } catch (const CadError&) {
+      throw;
+    } catch (const Standard_Failure& e) {
+      throw CadError("OpenCASCADE cannot compute " + nodeText(n, path) + ": " +
+                     e.GetMessageString());
+    }
+  }
+
+  std::optional<TopoDS_Shape> child(const Node& n, std::size_t i, NodePath& path) const {
+    path.push_back(i);
+    auto r = node(*n.children[i], path);
+    path.pop_back();
+    return r;
+  }
+
+  std::optional<TopoDS_Shape> nodeUnchecked(const Node& n, NodePath& path) const {
+    switch (n.kind) {
+      case NodeKind::Primitive:
+        return primitive(n.primitive);
+      case NodeKind::Union: {
+        std::vector<TopoDS_Shape> parts;
+        for (std::size_t i = 0; i < n.children.size(); ++i) {
+          if (auto s = child(n, i, path)) parts.push_back(*s);
+        }
+        if (parts.empty()) return std::nullopt;
+        if (parts.size() == 1) return parts.front();
+        TopTools_ListOfShape tools;
+        for (std::size_t i = 1; i < parts.size(); ++i) tools.Append(parts[i]);
+        BRepAlgoAPI_Fuse op;
+        return boolean(op, parts.front(), tools, n, path);
+      }
+      case NodeKind::Intersection: {
+        // One tool at a time: a boolean with several tools treats them as
+        // their union.
+        std::optional<TopoDS_Shape> acc = child(n, 0, path);
+        for (std::size_t i = 1; acc && i < n.children.size(); ++i) {
+          const auto s = child(n, i, path);
+          if (!s) return std::nullopt;
+          TopTools_ListOfShape tools;
+          tools.Append(*s);
+          BRepAlgoAPI_Common op;
+          acc = boolean(op, *acc, tools, n, path);
+        }
+        return acc;
+      }
+      case NodeKind::Difference: {
+        const auto base = child(n, 0, path);
+        if (!base) return std::nullopt;
+        TopTools_ListOfShape tools;
+        for (std::size_t i = 1; i < n.children.size(); ++i) {
+          if (auto s = child(n, i, path)) tools.Append(*s);
+        }
+        if (tools.IsEmpty()) return base;
+        BRepAlgoAPI_Cut op;
+        return boolean(op, *base, tools, n, path);
+      }
+      case NodeKind::Complement: {
+        const TopoDS_Shape all = cube(surroundingCube(extent, bigEdge));
+        const auto s = child(n, 0, path);
+        if (!s) return all;
+        TopTools_ListOfShape tools;
+        tools.Append(*s);
+        BRepAlgoAPI_Cut op;
+        return boolean(op, all, tools, n, path);
+      }
+    }
+    return std::nullopt;
+  }
+};
+
+// The leaf whose surface holds the face: points inside the face (the centres
+// of its triangles in the surface's parameters, so off its edges, which
+// other surfaces share) on the leaf's surface within `tolerance`; the
+// closest fit when several leaves' surfaces hold them.
+const Node* faceLeaf(const TopoDS_Face& face, const std::vector<const Node*>& leaves,
+                     double tolerance) {
+  TopLoc_Location loc;
+  const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, loc);
+  if (tri.IsNull() || tri->NbTriangles() == 0 || !tri->HasUVNodes()) return nullptr;
+  const BRepAdaptor_Surface surface(face);  // located: points in world coordinates
+  std::vector<Vec3> points;
+  const int count = tri->NbTriangles();
+  const int step = std::max(1, count / 32);
+  for (int i = 1; i <= count; i += step) {
+    int a, b, c;
+    tri->Triangle(i).Get(a, b, c);
+    const gp_XY uv = (tri->UVNode(a).XY() + tri->UVNode(b).XY() + tri->UVNode(c).XY()) / 3.0;
+    const gp_Pnt p = surface.Value(uv.X(), uv.Y());
+    points.emplace_back(p.X(), p.Y(), p.Z());
+  }
+  const Node* best = nullptr;
+  double bestError = tolerance;
+  for (const Node* leaf : leaves) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < points.size() && worst <= bestError; ++i) {
+      worst = std::max(worst, std::abs(leaf->primitive.value(points[i])));
+    }
+    if (worst <= bestError && (!best || worst < bestError)) {
+      best = leaf;
+      bestError = worst;
+    }
+  }
+  return best;
+}
+
+// The volume of the tree's solid, by stratified sampling of `box` (one
+// random point per cell of an n^3 grid; deterministic).
+double sampledVolume(const CsgTree& tree, const Aabb& box, int n) {
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Vec3 cell = box.size() / double(n);
+  std::vector<Vec3> points;
+  points.reserve(std::size_t(n) * n * n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        points.push_back(box.min + Vec3((i + u(rng)) * cell.x(), (j + u(rng)) * cell.y(),
+                                        (k + u(rng)) * cell.z()));
+      }
+    }
+  }
+  std::vector<double> f(points.size());
+  tree.values(points, f);
+  const auto inside = std::count_if(f.begin(), f.end(), [](double v) { return v >= 0.0; });
+  return double(inside) / double(points.size()) * box.size().prod();
+}
+
+double shapeVolume(const TopoDS_Shape& shape) {
+  GProp_GProps props;
+  BRepGProp::VolumeProperties(shape, props);
+  return props.Mass();
+}
+
+// OpenCASCADE's solid agrees with the tree's when their volumes agree
+// within `tolerance` (relative) or a sliver of the box.
+bool volumesAgree(double brep, double sampled, const Aabb& box, double tolerance) {
+  return std::abs(brep - sampled) <= tolerance * std::max(sampled, 1e-4 * box.size().prod());
+}
+
+}  // namespace
+
+BrepSummary summarize(const TopoDS_Shape& shape) {
+  BrepSummary s;
+  if (shape.IsNull()) return s;
+  for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) ++s.solids;
+  for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) ++s.faces;
+  s.valid = BRepCheck_Analyzer(shape).IsValid();
+  s.closed = s.solids > 0;
+  for (TopExp_Explorer e(shape, TopAbs_SHELL); e.More(); e.Next()) {
+    if (!BRep_Tool::IsClosed(e.Current())) s.closed = false;
+  }
+  GProp_GProps props;
+  BRepGProp::VolumeProperties(shape, props);
+  s.volume = props.Mass();
+  Bnd_Box box;
+  BRepBndLib::AddOptimal(shape, box, false, false);
+  if (!box.IsVoid()) {
+    double x0, y0, z0, x1, y1, z1;
+    box.Get(x0, y0, z0, x1, y1, z1);
+    s.bounds.min = Vec3(x0, y0, z0);
+    s.bounds.max = Vec3(x1, y1, z1);
+  }
+  return s;
+}
+
+BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
+  tree.validate();
+  const Aabb extent = exportExtent(tree);
+  const auto names = leafNames(tree);
+  const Builder b{options, names, extent,
+                  options.halfSpaceScale * std::max(extent.diagonal(), 1e-9)};
+  NodePath path;
+  std::optional<TopoDS_Shape> shape = b.node(*tree.root(), path);
+  if (!shape) throw CadError("the solid is empty: no point lies inside the tree");
+  // OpenCASCADE's booleans can return a valid but wrong solid on nearly
+  // coincident or tangent faces: compare volumes with the tree's, and on a
+  // mismatch name the first operation (children before parents) whose
+  // solid disagrees.
+  if (options.volumeTolerance > 0.0) {
+    const Aabb box = grownBox(extent, 0.01 * extent.diagonal());
+    const double sampled = sampledVolume(tree, box, 48);
+    const double brep = shapeVolume(*shape);
+    if (!volumesAgree(brep, sampled, box, options.volumeTolerance)) {
+      std::string where = b.nodeText(*tree.root(), NodePath{});
+      std::function<bool(const Node&, NodePath&)> locate = [&](const Node& n, NodePath& p) {
+        if (n.kind == NodeKind::Primitive) return false;
+        for (std::size_t i = 0; i < n.children.size(); ++i) {
+          p.push_back(i);
+          const bool found = locate(*n.children[i], p);
+          p.pop_back();
+          if (found) return true;
+        }
+        const CsgTree sub(tree.nodeAt(p));
+        NodePath local;
+        const auto s = b.node(n, local);
+        const Aabb subBox = grownBox(exportExtent(sub), 0.01 * extent.diagonal());
+        const double v = sampledVolume(sub, subBox, 48);
+        if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance))
+          return false;
+        where = b.nodeText(n, p);
+        return true;
+      };
+      NodePath p;
+      locate(*tree.root(), p);
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), " (the part comes out with volume %.6g instead of %.6g)",
+                    brep, sampled);
+      throw CadError("OpenCASCADE computed a wrong solid for " + where + buf);
+    }
+  }
+
+  BrepResult result;
+  try {
+    if (options.unifyFaces) {
+      // Merging is cosmetic: when OpenCASCADE cannot do it, or its result is
+      // not valid, the pieces stay as the booleans left them.
+      try {
+        ShapeUpgrade_UnifySameDomain unify(*shape, true, true, false);
+        unify.Build();
+        const TopoDS_Shape merged = unify.Shape();
+        if (Builder::hasSolid(merged) && BRepCheck_Analyzer(merged).IsValid()) shape = merged;
+      } catch (const Standard_Failure&) {
+      }
+    }
+    // Keep the solids alone (a boolean's result is a compound).
+    std::vector<TopoDS_Shape> solids;
+    for (TopExp_Explorer e(*shape, TopAbs_SOLID); e.More(); e.Next()) solids.push_back(e.Current());
+    if (solids.size() == 1) {
+      result.shape = solids.front();
+    } else {
+      TopoDS_Compound compound;
+      BRep_Builder builder;
+      builder.MakeCompound(compound);
+      for (const TopoDS_Shape& s : solids) builder.Add(compound, s);
+      result.shape = compound;
+    }
+    if (!BRepCheck_Analyzer(result.shape).IsValid()) {
+      throw CadError("OpenCASCADE built an invalid solid for " +
+                     b.nodeText(*tree.root(), NodePath{}));
+    }
+    if (options.nameFaces) {
+      const double diagonal = extent.diagonal();
+      BRepMesh_IncrementalMesh mesh(result.shape, 0.01 * diagonal, false, 0.5, false);
+      const std::vector<const Node*> leaves = tree.leaves();
+      for (TopExp_Explorer e(result.shape, TopAbs_FACE); e.More(); e.Next()) {
+        const Node* leaf = faceLeaf(TopoDS::Face(e.Current()), leaves, 1e-6 * diagonal);
+        if (leaf) result.faceNames.emplace_back(e.Current(), names.at(leaf));
+      }
+    }
+  } catch (const Standard_Failure& e) {
+    throw CadError(std::string("OpenCASCADE cannot finish the solid: ") + e.GetMessageString());
+  }
+  return result;
+}
+
+}  // namespace csgvox::cad

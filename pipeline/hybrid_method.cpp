@@ -1,0 +1,359 @@
+#include "pipeline/hybrid_method.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+
+#include "core/sardf.h"
+#include "evolve/point_regions.h"
+#include "evolve/redundancy.h"
+
+namespace csgvox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// The operands of a top-level union, or the tree itself.
+std::vector<CsgTree> unionMembers(const CsgTree& tree) {
+  std::vector<CsgTree> out;
+  if (tree.root()->kind == NodeKind::Union) {
+    for (const NodePtr& child : tree.root()->children) out.emplace_back(child);
+  } else {
+    out.push_back(tree);
+  }
+  return out;
+}
+
+CsgTree uniteAll(const std::vector<CsgTree>& trees) {
+  return trees.size() == 1 ? trees.front() : CsgTree::unite(trees);
+}
+
+Aabb grown(Aabb box, double margin) {
+  if (!box.isEmpty()) {
+    box.min.array() -= margin;
+    box.max.array() += margin;
+  }
+  return box;
+}
+
+bool meets(const Aabb& a, const Aabb& b) {
+  return !a.isEmpty() && !b.isEmpty() && !a.intersected(b).isEmpty();
+}
+
+// Points farther than `distance` from the tree's surface, or whose normal is
+// further than `angle` (radians) from the field's outward direction.
+std::vector<std::uint32_t> badlyExplained(const PointCloud& scan, const CsgTree& tree,
+                                          const SetOperations& ops, double distance, double angle) {
+  std::vector<char> bad(scan.size(), 0);
+  const double cosLimit = std::cos(angle);
+  tbb::parallel_for(std::size_t{0}, scan.size(), [&](std::size_t i) {
+    const FieldValue v = tree.evaluate(scan.points[i], ops);
+    const double g = v.gradient.norm();
+    // ∇f points inwards, the scan's normal outwards.
+    const double c = g > 0.0 ? -v.gradient.dot(scan.normals[i]) / g : -1.0;
+    bad[i] = std::abs(v.f) > distance || c < cosLimit;
+  });
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < bad.size(); ++i)
+    if (bad[i]) out.push_back(std::uint32_t(i));
+  return out;
+}
+
+// A region: its bad points, the box around them, and the union members of
+// the tree (indices) its subtree is made of.
+struct Region {
+  std::vector<std::uint32_t> bad;
+  Aabb box;
+  std::vector<std::size_t> members;
+};
+
+// The members whose bounds meet the box, growing the box by each one taken,
+// until no member is added.
+void selectMembers(Region& region, std::span<const Aabb> memberBounds, double margin) {
+  std::vector<char> taken(memberBounds.size(), 0);
+  for (bool added = true; added;) {
+    added = false;
+    for (std::size_t m = 0; m < memberBounds.size(); ++m) {
+      if (taken[m] || !meets(region.box, grown(memberBounds[m], margin))) continue;
+      taken[m] = 1;
+      region.box.extend(grown(memberBounds[m], margin));
+      added = true;
+    }
+  }
+  region.members.clear();
+  for (std::size_t m = 0; m < taken.size(); ++m)
+    if (taken[m]) region.members.push_back(m);
+}
+
+// Regions sharing a member become one (in order of their first point).
+std::vector<Region> joinSharingRegions(std::vector<Region> regions,
+                                       std::span<const Aabb> memberBounds, double margin) {
+  for (bool joined = true; joined;) {
+    joined = false;
+    for (std::size_t a = 0; a < regions.size() && !joined; ++a) {
+      for (std::size_t b = a + 1; b < regions.size() && !joined; ++b) {
+        std::vector<std::size_t> common;
+        std::set_intersection(regions[a].members.begin(), regions[a].members.end(),
+                              regions[b].members.begin(), regions[b].members.end(),
+                              std::back_inserter(common));
+        if (common.empty() && !meets(regions[a].box, regions[b].box)) continue;
+        regions[a].bad.insert(regions[a].bad.end(), regions[b].bad.begin(), regions[b].bad.end());
+        std::sort(regions[a].bad.begin(), regions[a].bad.end());
+        regions[a].box.extend(regions[b].box);
+        selectMembers(regions[a], memberBounds, margin);
+        regions.erase(regions.begin() + std::ptrdiff_t(b));
+        joined = true;
+      }
+    }
+  }
+  return regions;
+}
+
+// A seed per region, spread by SplitMix64's finaliser.
+std::uint64_t regionSeed(std::uint64_t seed, std::size_t index) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (index + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// The voxels whose centre lies in the box.
+VoxelSet voxelsIn(const VoxelGrid& grid, const Aabb& box) {
+  VoxelSet out(grid.voxelCount());
+  const auto& d = grid.dims();
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i)
+        if (box.contains(grid.center(i, j, k))) out.set(grid.index(i, j, k));
+  return out;
+}
+
+// What a region's search found.
+struct RegionSearch {
+  HybridRegion report;
+  CsgTree subtree;  // the original subtree (union of its members)
+  CsgTree refined;  // the search's best tree
+};
+
+RegionSearch searchRegion(const PointCloud& scan, const Region& region,
+                          const std::vector<CsgTree>& members,
+                          std::span<const Candidate> candidates, const VoxelGrid& grid,
+                          const VoxelSet& inside, const HybridOptions& options, std::uint64_t seed,
+                          double timeLimit) {
+  const Clock::time_point start = Clock::now();
+  const double diagonal = scan.diagonal();
+  const double tolerance = options.fitness.distanceTolerance * diagonal;
+  RegionSearch out;
+  std::vector<CsgTree> chosen;
+  for (const std::size_t m : region.members) chosen.push_back(members[m]);
+  out.subtree = uniteAll(chosen);
+
+  // The candidates that fit the region: in its box, and with a surface near
+  // many of its bad points; best supported first.
+  std::vector<std::pair<std::size_t, std::size_t>> fits;  // (bad points near it, candidate)
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const CsgTree& t = candidates[c].tree;
+    if (!meets(t.bounds(), region.box)) continue;
+    std::size_t near = 0;
+    for (const std::uint32_t i : region.bad) {
+      for (const Node* leaf : t.leaves()) {
+        if (std::abs(leaf->primitive.value(scan.points[i])) <= 2.0 * tolerance) {
+          ++near;
+          break;
+        }
+      }
+    }
+    if (near >= 5) fits.push_back({near, c});
+  }
+  std::stable_sort(fits.begin(), fits.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (fits.size() > options.maxCandidates) fits.resize(options.maxCandidates);
+
+  // The library: the subtree's primitives and the fitting candidates'.
+  std::vector<Primitive> primitives;
+  std::vector<std::string> names;
+  const auto add = [&](const Node* leaf) {
+    for (const Primitive& p : primitives)
+      if (p == leaf->primitive) return;
+    primitives.push_back(leaf->primitive);
+    names.push_back(leaf->name.empty() ? "p" + std::to_string(names.size()) : leaf->name);
+  };
+  for (const Node* leaf : out.subtree.leaves()) add(leaf);
+  for (const auto& [near, c] : fits)
+    for (const Node* leaf : candidates[c].tree.leaves()) add(leaf);
+  const PrimitiveLibrary library(std::move(primitives), std::move(names));
+
+  // The points around the region and the labels there.
+  std::vector<Vec3> points, normals;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!region.box.contains(scan.points[i])) continue;
+    points.push_back(scan.points[i]);
+    normals.push_back(scan.normals[i]);
+  }
+  const VoxelTarget target{grid, inside & voxelsIn(grid, region.box)};
+  const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
+  const FitnessModel model(points, normals, diagonal, library, options.fitness, t);
+  std::optional<FitnessModel> rough;
+  if (options.roughPoints > 0 && points.size() > options.roughPoints) {
+    std::vector<Vec3> rp, rn;
+    for (const std::uint32_t i : spreadSample(points.size(), options.roughPoints, seed)) {
+      rp.push_back(points[i]);
+      rn.push_back(normals[i]);
+    }
+    rough.emplace(rp, rn, diagonal, library, options.fitness, t);
+  }
+
+  // Seeds: the subtree, and the subtree with one fitting candidate added or
+  // taken away.
+  const CsgTree subtree = library.adopt(out.subtree);
+  std::vector<CsgTree> seeds = {subtree};
+  for (const auto& [near, c] : fits) {
+    const CsgTree candidate = library.adopt(candidates[c].tree);
+    seeds.push_back(CsgTree::unite({subtree, candidate}));
+    seeds.push_back(CsgTree::subtract({subtree, candidate}));
+    if (seeds.size() + 2 > options.evolve.population) break;
+  }
+  EvolveOptions eo = options.evolve;
+  eo.seed = seed;
+  eo.timeLimit = timeLimit;
+  eo.variation.maxDepth = std::max(eo.variation.maxDepth, subtree.depth() + 3);
+  const EvolveResult r = evolve(model, seeds, eo, {}, rough ? &*rough : nullptr);
+  out.refined = r.best;
+
+  HybridRegion& h = out.report;
+  h.badPoints = region.bad.size();
+  h.points = points.size();
+  h.members = region.members.size();
+  h.library = library.size();
+  h.generations = r.generations;
+  h.localBefore = model.evaluate(subtree).total;
+  h.localAfter = r.fitness.total;
+  h.primitivesBefore = subtree.primitiveCount();
+  h.primitivesAfter = r.best.primitiveCount();
+  h.seconds = secondsSince(start);
+  return out;
+}
+
+}  // namespace
+
+HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
+                        std::span<const Candidate> candidates, const VoxelGrid& grid,
+                        const VoxelSet& inside, const HybridOptions& options, double timeLimit) {
+  if (!scan.hasNormals())
+    throw std::invalid_argument("the hybrid method needs a scan with normals");
+  if (tree.empty()) throw std::invalid_argument("the hybrid method needs a tree to refine");
+  const Clock::time_point start = Clock::now();
+  const double diagonal = scan.diagonal();
+  const double voxel = grid.voxelSize();
+  HybridResult out;
+  out.tree = tree;
+  out.primitivesBefore = out.primitivesAfter = tree.primitiveCount();
+
+  const SardfOperations sardf(options.fitness.sardfRadius * diagonal);
+  const SetOperations& ops = options.fitness.operations == SetOperationKind::Sardf
+                                 ? static_cast<const SetOperations&>(sardf)
+                             : options.fitness.operations == SetOperationKind::RFunction
+                                 ? rFunctionOperations()
+                                 : minMaxOperations();
+  const std::vector<std::uint32_t> bad =
+      badlyExplained(scan, tree, ops, options.fitness.distanceTolerance * diagonal,
+                     options.badAngle * std::numbers::pi / 180.0);
+  out.badPoints = bad.size();
+
+  // Regions of bad points, each with the members of the tree around it.
+  const std::vector<CsgTree> members = unionMembers(tree);
+  std::vector<Aabb> memberBounds;
+  for (const CsgTree& m : members) memberBounds.push_back(m.bounds());
+  const double margin = options.margin * voxel;
+  const auto least = std::max<std::size_t>(
+      10, std::size_t(std::ceil(options.minRegionPoints * double(scan.size()))));
+  std::vector<Region> regions;
+  for (std::vector<std::uint32_t>& points :
+       pointRegions(scan.points, bad, options.regionCell * voxel)) {
+    if (points.size() < least) continue;
+    Region r;
+    for (const std::uint32_t i : points) r.box.extend(scan.points[i]);
+    r.box = grown(r.box, margin);
+    r.bad = std::move(points);
+    selectMembers(r, memberBounds, margin);
+    regions.push_back(std::move(r));
+  }
+  regions = joinSharingRegions(std::move(regions), memberBounds, margin);
+
+  // The regions' searches, in parallel; each is deterministic for its seed.
+  std::vector<RegionSearch> found(regions.size());
+  const double left = timeLimit > 0.0 ? std::max(timeLimit - secondsSince(start), 1e-3) : 0.0;
+  tbb::parallel_for(std::size_t{0}, regions.size(), [&](std::size_t k) {
+    found[k] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
+                            regionSeed(options.evolve.seed, k), left);
+  });
+
+  // One model of the whole tree on all points, over every primitive any
+  // result may hold, judges each replacement in turn.
+  std::vector<Primitive> primitives;
+  std::vector<std::string> names;
+  const auto add = [&](const CsgTree& t) {
+    for (const Node* leaf : t.leaves()) {
+      if (std::find(primitives.begin(), primitives.end(), leaf->primitive) != primitives.end())
+        continue;
+      primitives.push_back(leaf->primitive);
+      names.push_back(leaf->name);
+    }
+  };
+  add(tree);
+  for (const RegionSearch& f : found) add(f.refined);
+  const PrimitiveLibrary library(std::move(primitives), std::move(names));
+  const VoxelTarget target{grid, inside};
+  const FitnessModel model(scan.points, scan.normals, diagonal, library, options.fitness,
+                           options.fitness.voxelWeight > 0.0 ? &target : nullptr);
+  std::vector<CsgTree> current = members;  // members; a replaced region's first one holds it
+  out.before = model.evaluate(library.adopt(tree));
+  Fitness best = out.before;
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    HybridRegion& h = found[k].report;
+    if (!(h.localAfter > h.localBefore)) {
+      out.regions.push_back(h);
+      continue;
+    }
+    std::vector<CsgTree> next;
+    for (std::size_t m = 0; m < current.size(); ++m) {
+      if (current[m].empty()) continue;
+      if (!std::binary_search(regions[k].members.begin(), regions[k].members.end(), m)) {
+        next.push_back(current[m]);
+      } else if (m == regions[k].members.front()) {
+        next.push_back(found[k].refined);
+      }
+    }
+    const CsgTree candidate = library.adopt(normalizeTree(uniteAll(next)));
+    const Fitness f = model.evaluate(candidate);
+    if (f.total > best.total + options.minGain * double(scan.size())) {
+      best = f;
+      h.replaced = true;
+      ++out.replaced;
+      // Keep member indices valid: the region's other members become the
+      // refined subtree too, so later regions (disjoint in members) still
+      // find theirs in place.
+      for (const std::size_t m : regions[k].members)
+        current[m] = m == regions[k].members.front() ? found[k].refined : CsgTree{};
+    }
+    out.regions.push_back(h);
+  }
+  std::vector<CsgTree> kept;
+  for (const CsgTree& m : current)
+    if (!m.empty()) kept.push_back(m);
+  out.tree = removeRedundancy(library.adopt(normalizeTree(uniteAll(kept))), model);
+  out.after = model.evaluate(out.tree);
+  out.primitivesAfter = out.tree.primitiveCount();
+  return out;
+}
+
+}  // namespace csgvox

@@ -1,0 +1,97 @@
+#pragma once
+/// The hybrid method's second half: the points judge the voxel stage's tree
+/// and the genetic search repairs it where the voxels could not see.
+///
+/// Points the tree explains badly (farther than εd from its surface, or with
+/// a normal off by more than badAngle) are grouped into regions; the union
+/// members of the tree whose bounds meet a region (with the members meeting
+/// those, until none is added) are its subtree. Regions sharing a member are
+/// one. Each region's subtree is searched again by the genetic search, seeded
+/// with the subtree and its one-step variants (∪ or − one candidate), over
+/// the subtree's primitives and the bounded candidates that fit the region's
+/// points — including those the voxel stage dropped — with Eq. 7 on the
+/// points around it plus the voxel term there (min/max field by default:
+/// on clean scans SARDF gives the same fitness at several times the cost). Regions are
+/// independent, so they run in parallel. A refined subtree replaces the
+/// original only when the whole tree's fitness on all points improves (by
+/// more than minGain·N, so noise alone does not swap primitives), so the
+/// result is never worse than the voxel tree by that measure; last,
+/// redundant nodes of the whole tree are removed.
+
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "core/csg_tree.h"
+#include "core/point_cloud.h"
+#include "evolve/fitness.h"
+#include "evolve/genetic_search.h"
+#include "primitives/hypotheses.h"
+#include "voxel/voxel_grid.h"
+#include "voxel/voxel_set.h"
+
+namespace csgvox {
+
+/// The search of a region: population 100, at most 300 generations, 40
+/// without improvement.
+inline EvolveOptions refineSearchDefaults() {
+  EvolveOptions o;
+  o.population = 100;
+  o.maxGenerations = 300;
+  o.stallGenerations = 40;
+  return o;
+}
+
+/// Options of refineTree().
+struct HybridOptions {
+  FitnessOptions fitness = {.voxelWeight = 1.0};  ///< Eq. 7 (min/max field) + the voxel term
+  EvolveOptions evolve = refineSearchDefaults();  ///< each region's search
+  double badAngle = 30.0;          ///< degrees: a normal further off is badly explained
+  double regionCell = 2.0;         ///< voxels: bad points in neighbouring cells of this size join
+  double minRegionPoints = 0.002;  ///< regions with fewer points than this fraction of N are left
+  double margin = 2.0;             ///< voxels added around a region and its subtree
+  double minGain = 0.002;  ///< a replacement must raise the whole tree's fitness by this fraction
+                           ///< of N at least (a smallest region's worth of points)
+  std::size_t maxCandidates = 32;  ///< candidates added to a region's primitives at most
+  std::size_t roughPoints = 6000;  ///< a region's generations use at most this many points until
+                                   ///< its search stalls
+};
+
+/// What refineTree() did in one region.
+struct HybridRegion {
+  std::size_t badPoints = 0;         ///< badly explained points that formed the region
+  std::size_t points = 0;            ///< points its search was judged on
+  std::size_t members = 0;           ///< union members of the tree in its subtree
+  std::size_t library = 0;           ///< primitives its search combined
+  std::size_t generations = 0;       ///< generations of its search
+  double localBefore = 0.0;          ///< the subtree's fitness on the region's points
+  double localAfter = 0.0;           ///< the search's best tree's
+  bool replaced = false;             ///< the refined subtree went into the tree
+  std::size_t primitivesBefore = 0;  ///< primitives of the subtree
+  std::size_t primitivesAfter = 0;   ///< primitives of the refined subtree
+  double seconds = 0.0;              ///< wall time of its search
+};
+
+/// Result of refineTree().
+struct HybridResult {
+  CsgTree tree;                       ///< the refined tree
+  std::vector<HybridRegion> regions;  ///< in order of their first point
+  std::size_t badPoints = 0;          ///< points the input tree explained badly
+  Fitness before;                     ///< the input tree's fitness on all points
+  Fitness after;                      ///< the result's
+  std::size_t primitivesBefore = 0;
+  std::size_t primitivesAfter = 0;
+  std::size_t replaced = 0;  ///< regions whose subtree was replaced
+};
+
+/// Refines a tree on an oriented scan. `candidates` are the bounded
+/// hypotheses (their leaves are the extra primitives), `grid` and `inside`
+/// the voxel labels. `timeLimit` (seconds, 0: none) bounds the searches,
+/// which then keep their best trees.
+/// @throw std::invalid_argument when the scan has no normals or the tree is empty.
+HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
+                        std::span<const Candidate> candidates, const VoxelGrid& grid,
+                        const VoxelSet& inside, const HybridOptions& options = {},
+                        double timeLimit = 0.0);
+
+}  // namespace csgvox

@@ -1,0 +1,88 @@
+// A real CAD program judges tree.step and tree.csg: FreeCAD's command-line
+// interpreter (freecadcmd, Debian's freecad-python3) opens every bundled
+// part's tree.step as one valid solid and imports its tree.csg with the
+// OpenSCAD workbench's importCSG as one valid shape built from Part
+// primitives, both with the tree's volume. Skipped, saying so, only when
+// freecadcmd is not installed.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "cad/step_export.h"
+#include "core/export_extent.h"
+#include "io/csg_writer.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "solid_sampling.h"
+#include "temp_dir_test.h"
+#include "test_helpers.h"
+
+namespace csgvox {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool haveFreecad() { return std::system("command -v freecadcmd > /dev/null 2>&1") == 0; }
+
+class FreeCad : public test::TempDirTest {};
+
+TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {
+  if (!haveFreecad())
+    GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
+  if (!stepExportAvailable()) GTEST_SKIP() << "built without OpenCASCADE (CSGVOX_WITH_OCCT=OFF)";
+  std::map<std::string, CsgTree> trees;
+  std::map<std::string, double> volumes;
+  std::ofstream list(dir_ / "parts.txt");
+  for (const std::string& part : test::partNames()) {
+    const CsgTree tree = readTreeJson(test::dataDir() / part / "tree.json");
+    writeStep(dir_ / (part + ".step"), tree);
+    writeCsg(dir_ / (part + ".csg"), tree);
+    const Aabb extent = exportExtent(tree);
+    volumes[part] = test::sampleSolid(tree, test::grown(extent, 0.01 * extent.diagonal())).volume;
+    trees.emplace(part, tree);
+    list << part << "\n";
+  }
+  list.close();
+  const std::string cmd = "cd '" + dir_.string() + "' && CSGVOX_FREECAD_DIR='" + dir_.string() +
+                          "' timeout 600 freecadcmd '" + CSGVOX_TESTS_DIR +
+                          "/freecad_check.py' > freecad.log 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << cmd;
+  ASSERT_TRUE(fs::exists(dir_ / "results.txt")) << "freecadcmd did not finish; its output:\n"
+                                                << std::ifstream(dir_ / "freecad.log").rdbuf();
+
+  std::ifstream results(dir_ / "results.txt");
+  std::string line;
+  std::size_t parts = 0;
+  while (std::getline(results, line)) {
+    std::istringstream in(line);
+    std::string name;
+    int stepSolids = 0, stepValid = 0, csgRoots = 0, csgValid = 0, features = 0;
+    double stepVolume = 0, csgVolume = 0;
+    in >> name >> stepSolids >> stepValid >> stepVolume >> csgRoots >> csgValid >> csgVolume >>
+        features;
+    ASSERT_TRUE(in) << line;
+    SCOPED_TRACE(name);
+    ++parts;
+    const double v = volumes.at(name);
+    EXPECT_EQ(stepSolids, 1);
+    EXPECT_EQ(stepValid, 1);
+    EXPECT_NEAR(stepVolume / v, 1.0, 0.005);
+    EXPECT_EQ(csgRoots, 1);
+    EXPECT_EQ(csgValid, 1);
+    EXPECT_NEAR(csgVolume / v, 1.0, 0.005);
+    // Every primitive is an editable Part feature (a torus is a revolution).
+    EXPECT_GE(features, int(trees.at(name).primitiveCount()));
+    std::printf("[ freecad ] %-18s step %+.3f %%, csg %+.3f %% of the sampled volume\n",
+                name.c_str(), 100 * (stepVolume / v - 1), 100 * (csgVolume / v - 1));
+  }
+  EXPECT_EQ(parts, volumes.size());
+}
+
+}  // namespace
+}  // namespace csgvox
