@@ -113,7 +113,8 @@ Result reconstructArrays(const Array& points, const std::optional<Array>& normal
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError("points: " + rec.message);
     const app::Console quiet(true);
-    report = app::jobReport("<array>", scan, rec, settings, timings, quiet);
+    report = app::jobReport("<array>", scan, rec, settings, timings,
+                            nlohmann::ordered_json::array(), quiet);
     result.tree = rec.tree;
   }
   result.report = toPython(report);
