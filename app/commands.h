@@ -26,5 +26,6 @@ Command setupEval(CLI::App& app, CommonOptions& common);
 Command setupDetect(CLI::App& app, CommonOptions& common);
 Command setupImportGp(CLI::App& app, CommonOptions& common);
 Command setupCompare(CLI::App& app, CommonOptions& common);
+Command setupBatch(CLI::App& app, CommonOptions& common);
 
 }  // namespace csgvox::app

@@ -201,10 +201,20 @@ nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& 
   timings["export"] = watch.seconds();
   nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
   writeCadOutputs(output, scan, tree, mesh, settings, timings, warnings);
+  nlohmann::ordered_json report =
+      jobReport(scanPath, scan, rec, settings, timings, warnings, console, &output);
+  writeJsonFile(output.path("report.json"), report);
+  return report;
+}
 
+nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Scan& scan,
+                                 const Reconstruction& rec, const JobSettings& settings,
+                                 nlohmann::ordered_json timings, nlohmann::ordered_json warnings,
+                                 const Console& console, const OutputSet* output) {
+  const CsgTree& tree = rec.tree;
   // The tree is the result: a metric that cannot be computed is a warning
   // in the report, not a failed job.
-  watch = Stopwatch();
+  Stopwatch watch;
   std::optional<FitMetrics> fit;
   try {
     FitOptions fo;
@@ -345,12 +355,11 @@ nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& 
   report["warnings"] = std::move(warnings);
   nlohmann::ordered_json outputs = nlohmann::ordered_json::array();
   for (const std::string& name : jobFiles()) {
-    if (name == "report.json" || std::filesystem::exists(output.path(name)))
+    if (output && (name == "report.json" || std::filesystem::exists(output->path(name))))
       outputs.push_back(name);
   }
   report["outputs"] = std::move(outputs);
   report["timings_s"] = timings;
-  writeJsonFile(output.path("report.json"), report);
   if (fit) {
     console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D",
                      100 * fit->chamfer / fit->diagonal, 100 * fit->rmse / fit->diagonal));

@@ -56,4 +56,14 @@ nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& 
                                 const JobSettings& settings, nlohmann::ordered_json timings,
                                 const Console& console);
 
+/// The report of a finished reconstruction (report.json's content, as
+/// writeJob writes it): the settings, counts, the tree's size, its fit
+/// metrics against the scan, `timings` with the metrics' seconds added, and
+/// `warnings` with any metric that cannot be computed added. `outputs`
+/// lists the files staged in `output` (empty without one).
+nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Scan& scan,
+                                 const Reconstruction& rec, const JobSettings& settings,
+                                 nlohmann::ordered_json timings, nlohmann::ordered_json warnings,
+                                 const Console& console, const OutputSet* output = nullptr);
+
 }  // namespace csgvox::app

@@ -24,12 +24,13 @@ constexpr const char* kDescription =
     "  csgvox render TREE.json -o OUT.{ply,stl,obj,scad,txt,json} [--res N]\n"
     "  csgvox eval TREE.json SCAN [--json]\n"
     "  csgvox import-gp FIT EXPR -o {TREE.json,OUTDIR} [--scan SCAN]\n"
-    "  csgvox compare SCAN [--methods voxel,gp] [--import-gp FIT EXPR] [-o OUTDIR]\n\n"
+    "  csgvox compare SCAN [--methods voxel,gp] [--import-gp FIT EXPR] [-o OUTDIR]\n"
+    "  csgvox batch INPUT... -o OUTDIR [--jobs N] [--resume] [main-job options]\n\n"
     "Run 'csgvox <command> --help' for a command's options. Progress and timings go to\n"
     "stderr, results to files. Exit codes: 0 success, 1 bad input or failure, 2 bad usage.";
 
 bool isCommand(const char* arg) {
-  for (const char* c : {"detect", "sample", "render", "eval", "import-gp", "compare"}) {
+  for (const char* c : {"detect", "sample", "render", "eval", "import-gp", "compare", "batch"}) {
     if (std::strcmp(arg, c) == 0) return true;
   }
   return false;
@@ -65,6 +66,9 @@ int main(int argc, char** argv) {
       cmd = cli.add_subcommand("compare",
                                "Run several methods on one detection and compare their trees");
       run = app::setupCompare(*cmd, common);
+    } else if (std::strcmp(argv[1], "batch") == 0) {
+      cmd = cli.add_subcommand("batch", "Run the main job on many scans, a summary row per scan");
+      run = app::setupBatch(*cmd, common);
     } else if (std::strcmp(argv[1], "import-gp") == 0) {
       cmd = cli.add_subcommand("import-gp",
                                "Read the GP baseline's primitive and expression files into a tree");

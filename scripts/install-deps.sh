@@ -14,4 +14,6 @@ $SUDO apt-get install -y -q --no-install-recommends \
   libgtest-dev libgmock-dev libbenchmark-dev \
   openscad \
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev \
-  libocct-data-exchange-dev libstb-dev freecad-python3
+  libocct-data-exchange-dev libstb-dev freecad-python3 \
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-setuptools python3-wheel \
+  python3-pip python3-venv parallel

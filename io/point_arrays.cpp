@@ -1,0 +1,66 @@
+#include "io/point_arrays.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "io/errors.h"
+#include "primitives/normal_estimation.h"
+
+namespace csgvox {
+
+void completeNormals(Scan& scan, const std::string& source, const ReadOptions& options) {
+  if (scan.info.fromMesh || scan.cloud.hasNormals()) return;
+  const std::size_t n = scan.cloud.size();
+  if (n <= static_cast<std::size_t>(options.normalNeighbors)) {
+    throw ParseError(source + ": has only " + std::to_string(n) +
+                     " points, too few to estimate normals from " +
+                     std::to_string(options.normalNeighbors) + " neighbours");
+  }
+  try {
+    estimateNormals(scan.cloud, options.normalNeighbors);
+  } catch (const std::invalid_argument& e) {
+    // Points that span no surface (all at one position, on a line).
+    throw ParseError(source + ": " + e.what());
+  }
+  scan.info.normalsEstimated = true;
+}
+
+Scan scanFromArrays(std::vector<Vec3> points, std::vector<Vec3> normals, const std::string& source,
+                    const ReadOptions& options) {
+  if (!normals.empty() && normals.size() != points.size()) {
+    throw ParseError(source + ": " + std::to_string(normals.size()) + " normals for " +
+                     std::to_string(points.size()) + " points");
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) {
+      throw ParseError(source + ": point " + std::to_string(i + 1) +
+                       " has a non-finite coordinate");
+    }
+  }
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    Vec3& normal = normals[i];
+    const std::string what = "point " + std::to_string(i + 1);
+    if (!normal.allFinite()) throw ParseError(source + ": " + what + " has a non-finite normal");
+    const double length = normal.norm();
+    if (!(length > 1e-12)) throw ParseError(source + ": " + what + " has a zero-length normal");
+    if (std::abs(length - 1.0) > 1e-9) normal /= length;
+  }
+  const std::size_t minimum = std::max<std::size_t>(options.minPoints, 1);
+  if (points.size() < minimum) {
+    throw ParseError(source + ": has " + std::to_string(points.size()) + " points; at least " +
+                     std::to_string(minimum) + " are needed");
+  }
+  if (options.normalNeighbors < 6) {
+    throw std::invalid_argument("ReadOptions::normalNeighbors must be at least 6");
+  }
+  Scan scan;
+  scan.cloud.points = std::move(points);
+  scan.cloud.normals = std::move(normals);
+  scan.info.format = "array";
+  scan.info.pointsRead = scan.cloud.size();
+  completeNormals(scan, source, options);
+  return scan;
+}
+
+}  // namespace csgvox
