@@ -347,10 +347,21 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     }
     out.regions.push_back(h);
   }
+  if (out.replaced == 0) {
+    // Nothing the points paid for: the voxel tree, as it was (its own stage
+    // already removed what changes no voxel).
+    out.after = out.before;
+    return out;
+  }
   std::vector<CsgTree> kept;
   for (const CsgTree& m : current)
     if (!m.empty()) kept.push_back(m);
-  out.tree = removeRedundancy(library.adopt(normalizeTree(uniteAll(kept))), model);
+  out.tree = library.adopt(normalizeTree(uniteAll(kept)));
+  // Redundancy removal evaluates the tree once per node and operand on all
+  // points: skipped once the time limit is spent.
+  if (timeLimit <= 0.0 || secondsSince(start) < timeLimit) {
+    out.tree = removeRedundancy(out.tree, model);
+  }
   out.after = model.evaluate(out.tree);
   out.primitivesAfter = out.tree.primitiveCount();
   return out;

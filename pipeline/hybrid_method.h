@@ -15,8 +15,9 @@
 /// independent, so they run in parallel. A refined subtree replaces the
 /// original only when the whole tree's fitness on all points improves (by
 /// more than minGain·N, so noise alone does not swap primitives), so the
-/// result is never worse than the voxel tree by that measure; last,
-/// redundant nodes of the whole tree are removed.
+/// result is never worse than the voxel tree by that measure; last, when a
+/// subtree was replaced, redundant nodes of the whole tree are removed. When
+/// none was, the result is the input tree itself.
 
 #include <cstddef>
 #include <span>
