@@ -269,7 +269,12 @@ TEST_F(Batch, InterruptedRunKeepsFinishedRowsAndResumes) {
                               "' --jobs 2 --res 24 --mesh-res 24 --resume",
                           dir_);
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find(std::to_string(4 - finished) + " scan"), std::string::npos) << r.err;
+  // The one scan in flight may have committed its outputs before the signal
+  // and not its row: the resume then writes its row from its report and
+  // runs one scan fewer.
+  const bool allLeft = r.err.find(std::to_string(4 - finished) + " scan") != std::string::npos;
+  const bool oneDone = r.err.find(std::to_string(3 - finished) + " scan") != std::string::npos;
+  EXPECT_TRUE(allLeft || oneDone) << r.err;
   const std::vector<nlohmann::json> rows = jsonRows(out / "summary.jsonl");
   ASSERT_EQ(rows.size(), 4u);
   std::set<std::string> paths;
