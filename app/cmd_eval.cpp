@@ -6,6 +6,7 @@
 #include "app/commands.h"
 #include "app/console.h"
 #include "app/options.h"
+#include "core/solid_sampling.h"
 #include "io/report.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
@@ -38,7 +39,7 @@ Command setupEval(CLI::App& app, CommonOptions& common) {
                  "A reference tree (tree.json, e.g. the part's true tree): adds the volumetric "
                  "IoU of the two solids");
   app.add_option("--iou-res", opt->iouResolution,
-                 "Lattice cells along the longest side for the volumetric IoU")
+                 "Cells along the longest side of the stratified grid of the volumetric IoU")
       ->check(inRange(2, 2000));
   app.add_option("--seed", opt->fit.seed, "Random seed of the boundary sampling")
       ->check(nonNegativeInteger());

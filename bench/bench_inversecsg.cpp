@@ -186,9 +186,7 @@ Result runModel(const Options& opt, const std::string& model) {
       box.extend(treeBox);
     } else {
       // Unbounded tree: its volume is infinite anyway; measure near the part.
-      const double margin = 0.1 * meshBox.diagonal();
-      box.min.array() -= margin;
-      box.max.array() += margin;
+      box = box.grown(0.1 * meshBox.diagonal());
       res.note = "unbounded tree; " + res.note;
     }
     res.iou = sampledIou(

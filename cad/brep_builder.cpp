@@ -35,6 +35,7 @@
 #include <sstream>
 
 #include "core/export_extent.h"
+#include "core/solid_sampling.h"
 #include "io/tree_names.h"
 
 namespace csgvox::cad {
@@ -55,12 +56,6 @@ TopoDS_Shape cube(const Mat3& frame, const Vec3& center, const Vec3& size) {
   const Vec3 corner = center - r * (0.5 * size);
   const gp_Ax2 ax(pnt(corner), dir(r.col(2)), dir(r.col(0)));
   return BRepPrimAPI_MakeBox(ax, size.x(), size.y(), size.z()).Shape();
-}
-
-Aabb grownBox(Aabb box, double margin) {
-  box.min.array() -= margin;
-  box.max.array() += margin;
-  return box;
 }
 
 TopoDS_Shape cube(const StandInCube& c) { return cube(c.frame, c.center, Vec3::Constant(c.edge)); }
@@ -253,28 +248,6 @@ const Node* faceLeaf(const TopoDS_Face& face, const std::vector<const Node*>& le
   return best;
 }
 
-// The volume of the tree's solid, by stratified sampling of `box` (one
-// random point per cell of an n^3 grid; deterministic).
-double sampledVolume(const CsgTree& tree, const Aabb& box, int n) {
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Vec3 cell = box.size() / double(n);
-  std::vector<Vec3> points;
-  points.reserve(std::size_t(n) * n * n);
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        points.push_back(box.min + Vec3((i + u(rng)) * cell.x(), (j + u(rng)) * cell.y(),
-                                        (k + u(rng)) * cell.z()));
-      }
-    }
-  }
-  std::vector<double> f(points.size());
-  tree.values(points, f);
-  const auto inside = std::count_if(f.begin(), f.end(), [](double v) { return v >= 0.0; });
-  return double(inside) / double(points.size()) * box.size().prod();
-}
-
 double shapeVolume(const TopoDS_Shape& shape) {
   GProp_GProps props;
   BRepGProp::VolumeProperties(shape, props);
@@ -327,7 +300,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   // mismatch name the first operation (children before parents) whose
   // solid disagrees.
   if (options.volumeTolerance > 0.0) {
-    const Aabb box = grownBox(extent, 0.01 * extent.diagonal());
+    const Aabb box = extent.grown(0.01 * extent.diagonal());
     const double sampled = sampledVolume(tree, box, 48);
     const double brep = shapeVolume(*shape);
     if (!volumesAgree(brep, sampled, box, options.volumeTolerance)) {
@@ -343,7 +316,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
         const CsgTree sub(tree.nodeAt(p));
         NodePath local;
         const auto s = b.node(n, local);
-        const Aabb subBox = grownBox(exportExtent(sub), 0.01 * extent.diagonal());
+        const Aabb subBox = exportExtent(sub).grown(0.01 * extent.diagonal());
         const double v = sampledVolume(sub, subBox, 48);
         if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance))
           return false;

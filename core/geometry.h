@@ -28,6 +28,15 @@ struct Aabb {
   void extend(const Vec3& p);
   /// Grows the box to contain other.
   void extend(const Aabb& other);
+  /// The box grown by `margin` on every side (an empty box stays empty).
+  Aabb grown(double margin) const {
+    Aabb b = *this;
+    if (!isEmpty()) {
+      b.min.array() -= margin;
+      b.max.array() += margin;
+    }
+    return b;
+  }
   /// Intersection of two boxes (may be empty).
   Aabb intersected(const Aabb& other) const;
   /// Length of the diagonal (0 for an empty box, infinite for an unbounded one).

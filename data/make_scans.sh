@@ -3,14 +3,18 @@
 # and data/<part>/scan_noisy.ply (Gaussian noise, sigma = 0.5 % of the
 # diagonal), 10 000 points each with normals.
 # Usage: data/make_scans.sh [path/to/csgvox]
+# PARTS (a folder of <part>/tree.json), POINTS and SEED (of the first part;
+# the noisy scans use SEED + 1000) change the defaults: data/, 10000, 1.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 csgvox=${1:-"$here/../build/app/csgvox"}
-seed=1
-for tree in "$here"/*/tree.json; do
+parts=${PARTS:-$here}
+points=${POINTS:-10000}
+seed=${SEED:-1}
+for tree in "$parts"/*/tree.json; do
   part=$(dirname "$tree")
-  "$csgvox" sample "$tree" -o "$part/scan.ply" --points 10000 --seed "$seed" --quiet
-  "$csgvox" sample "$tree" -o "$part/scan_noisy.ply" --points 10000 --noise 0.005 \
+  "$csgvox" sample "$tree" -o "$part/scan.ply" --points "$points" --seed "$seed" --quiet
+  "$csgvox" sample "$tree" -o "$part/scan_noisy.ply" --points "$points" --noise 0.005 \
     --seed $((seed + 1000)) --quiet
   seed=$((seed + 1))
 done

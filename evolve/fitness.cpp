@@ -191,4 +191,19 @@ std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::u
   return all;
 }
 
+std::optional<FitnessModel> roughModel(std::span<const Vec3> points, std::span<const Vec3> normals,
+                                       double diagonal, const PrimitiveLibrary& library,
+                                       const FitnessOptions& options, const VoxelTarget* target,
+                                       std::size_t count, std::uint64_t seed) {
+  if (count == 0 || points.size() <= count) return std::nullopt;
+  std::vector<Vec3> p, n;
+  p.reserve(count);
+  n.reserve(count);
+  for (const std::uint32_t i : spreadSample(points.size(), count, seed)) {
+    p.push_back(points[i]);
+    n.push_back(normals[i]);
+  }
+  return std::optional<FitnessModel>(std::in_place, p, n, diagonal, library, options, target);
+}
+
 }  // namespace csgvox

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -91,5 +92,14 @@ class FitnessModel {
 /// `count` indices of [0, n) spread evenly over a seeded shuffle (all of
 /// them, in order, when count >= n): the points of a rough fitness.
 std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::uint64_t seed);
+
+/// The fitness on `count` of the points picked by spreadSample(seed): the
+/// model a search ranks by while it is rough. None when count is 0 or there
+/// are no more than `count` points (the full model is then as cheap).
+/// @throw std::invalid_argument as FitnessModel.
+std::optional<FitnessModel> roughModel(std::span<const Vec3> points, std::span<const Vec3> normals,
+                                       double diagonal, const PrimitiveLibrary& library,
+                                       const FitnessOptions& options, const VoxelTarget* target,
+                                       std::size_t count, std::uint64_t seed);
 
 }  // namespace csgvox

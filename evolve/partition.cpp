@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <unordered_map>
 #include <stdexcept>
 
 #include "evolve/tree_variation.h"
@@ -100,12 +101,8 @@ PrimitiveSupport primitiveSupport(std::span<const Vec3> points, const PrimitiveL
 }
 
 std::vector<SearchPartition> partitionSearch(const PrimitiveSupport& support, double margin) {
-  std::vector<Aabb> hulls = support.hulls;
-  for (Aabb& box : hulls) {
-    if (box.isEmpty()) continue;
-    box.min.array() -= margin;
-    box.max.array() += margin;
-  }
+  std::vector<Aabb> hulls;
+  for (const Aabb& box : support.hulls) hulls.push_back(box.grown(margin));
   std::vector<SearchPartition> out;
   for (const Set& clique : maximalCliques(overlapGraph(hulls))) {
     if (clique.size() == 1 && hulls[clique.front()].isEmpty()) continue;
@@ -134,45 +131,51 @@ void mergeNodes(const NodePtr& node, NodePath& path, std::vector<NodePath>& out)
   }
 }
 
+// The subtrees of a tree by structural hash.
+std::unordered_multimap<std::size_t, NodePtr> subtreeIndex(const CsgTree& tree) {
+  std::unordered_multimap<std::size_t, NodePtr> out;
+  for (const NodePath& path : nodePaths(tree)) {
+    const NodePtr& node = tree.nodeAt(path);
+    out.emplace(CsgTree(node).structuralHash(), node);
+  }
+  return out;
+}
+
+// Whether a subtree of the indexed tree has the structure of `sub`.
+bool occurs(const CsgTree& sub, const std::unordered_multimap<std::size_t, NodePtr>& index) {
+  const auto [first, last] = index.equal_range(sub.structuralHash());
+  return std::any_of(first, last,
+                     [&](const auto& entry) { return CsgTree(entry.second).structurallyEqual(sub); });
+}
+
 // Joins two trees at their largest common subtree that is a valid merge node
-// in one of them; an empty tree when there is none.
+// in one of them (the larger tree's node on a tie); an empty tree when there
+// is none.
 CsgTree mergePair(const CsgTree& t0, const CsgTree& t1) {
   const bool firstLarger = t0.nodeCount() >= t1.nodeCount();
   const CsgTree& large = firstLarger ? t0 : t1;
   const CsgTree& small = firstLarger ? t1 : t0;
-  // Every subtree of one tree that also occurs in the other, largest first.
-  struct Common {
-    std::size_t nodes;
-    NodePtr node;
-  };
-  std::vector<Common> common;
-  std::vector<NodePtr> others;
-  for (const NodePath& path : nodePaths(small)) others.push_back(small.nodeAt(path));
-  for (const NodePath& path : nodePaths(large)) {
-    const CsgTree sub(large.nodeAt(path));
-    for (const NodePtr& other : others) {
-      if (CsgTree(other).structurallyEqual(sub)) {
-        common.push_back({sub.nodeCount(), sub.root()});
-        break;
+  const auto largeIndex = subtreeIndex(large), smallIndex = subtreeIndex(small);
+  const CsgTree* target = nullptr;  // the tree whose node is replaced
+  NodePath at;
+  std::size_t bestNodes = 0;
+  const auto consider = [&](const CsgTree& tree, const auto& otherIndex) {
+    std::vector<NodePath> valid;
+    NodePath path;
+    mergeNodes(tree.root(), path, valid);
+    for (const NodePath& p : valid) {
+      const CsgTree sub(tree.nodeAt(p));
+      if (sub.nodeCount() > bestNodes && occurs(sub, otherIndex)) {
+        target = &tree;
+        at = p;
+        bestNodes = sub.nodeCount();
       }
     }
-  }
-  std::stable_sort(common.begin(), common.end(),
-                   [](const Common& a, const Common& b) { return a.nodes > b.nodes; });
-  std::vector<NodePath> largeMerge, smallMerge;
-  NodePath path;
-  mergeNodes(large.root(), path, largeMerge);
-  mergeNodes(small.root(), path, smallMerge);
-  for (const Common& c : common) {
-    const CsgTree sub(c.node);
-    for (const NodePath& p : largeMerge) {
-      if (CsgTree(large.nodeAt(p)).structurallyEqual(sub)) return large.replaceSubtree(p, small);
-    }
-    for (const NodePath& p : smallMerge) {
-      if (CsgTree(small.nodeAt(p)).structurallyEqual(sub)) return small.replaceSubtree(p, large);
-    }
-  }
-  return {};
+  };
+  consider(large, smallIndex);
+  consider(small, largeIndex);
+  if (!target) return {};
+  return target->replaceSubtree(at, target == &large ? small : large);
 }
 
 }  // namespace

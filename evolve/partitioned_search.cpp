@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 
+#include "core/seed.h"
 #include "evolve/redundancy.h"
 
 namespace csgvox {
@@ -18,14 +19,6 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// A seed per partition, spread by SplitMix64's finaliser.
-std::uint64_t partitionSeed(std::uint64_t seed, std::size_t index) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (index + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
 // Friedrich's bound on the height of a partition's trees: sqrt(π·C(n,2)).
 std::size_t heightBound(std::size_t primitives, std::size_t cap) {
   const double pairs = 0.5 * double(primitives) * double(primitives > 0 ? primitives - 1 : 0);
@@ -35,7 +28,8 @@ std::size_t heightBound(std::size_t primitives, std::size_t cap) {
 
 // The fitness over a subset of the points, and its rough version.
 struct PointModels {
-  std::optional<FitnessModel> full, rough;
+  FitnessModel full;
+  std::optional<FitnessModel> rough;
 };
 
 PointModels pointModels(std::span<const Vec3> points, std::span<const Vec3> normals,
@@ -46,17 +40,9 @@ PointModels pointModels(std::span<const Vec3> points, std::span<const Vec3> norm
   p.reserve(subset.size());
   n.reserve(subset.size());
   for (const std::uint32_t i : subset) p.push_back(points[i]), n.push_back(normals[i]);
-  PointModels out;
-  out.full.emplace(p, n, diagonal, library, fitness, target);
-  if (roughPoints > 0 && p.size() > roughPoints) {
-    std::vector<Vec3> rp, rn;
-    for (const std::uint32_t i : spreadSample(p.size(), roughPoints, seed)) {
-      rp.push_back(p[i]);
-      rn.push_back(n[i]);
-    }
-    out.rough.emplace(rp, rn, diagonal, library, fitness, target);
-  }
-  return out;
+  std::optional<FitnessModel> rough =
+      roughModel(p, n, diagonal, library, fitness, target, roughPoints, seed);
+  return {FitnessModel(p, n, diagonal, library, fitness, target), std::move(rough)};
 }
 
 }  // namespace
@@ -70,10 +56,9 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
                                     const VoxelTarget* target) {
   const Clock::time_point start = Clock::now();
   PartitionedResult out;
-  std::vector<std::uint32_t> all(points.size());
-  for (std::size_t i = 0; i < all.size(); ++i) all[i] = std::uint32_t(i);
-  const PointModels whole = pointModels(points, normals, all, diagonal, library, fitness,
-                                        options.roughPoints, evolveOptions.seed, target);
+  const FitnessModel whole(points, normals, diagonal, library, fitness, target);
+  const std::optional<FitnessModel> wholeRough = roughModel(
+      points, normals, diagonal, library, fitness, target, options.roughPoints, evolveOptions.seed);
 
   const double tolerance = options.supportTolerance * fitness.distanceTolerance * diagonal;
   const std::vector<SearchPartition> partitions = partitionSearch(
@@ -106,14 +91,14 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
       eo.timeLimit =
           std::max(std::chrono::duration<double>(partDeadline - Clock::now()).count(), 1e-3);
     }
-    eo.seed = partitionSeed(evolveOptions.seed, k);
+    eo.seed = mixSeed(evolveOptions.seed, k);
     eo.variation.maxDepth = heightBound(part.primitives.size(), evolveOptions.variation.maxDepth);
     eo.variation.initialDepth = std::min(eo.variation.initialDepth, eo.variation.maxDepth);
     eo.variation.mutationDepth = std::min(eo.variation.mutationDepth, eo.variation.maxDepth);
     const PointModels models = pointModels(points, normals, part.points, diagonal, sub, partFitness,
                                            options.roughPoints, eo.seed, nullptr);
     const Clock::time_point t = Clock::now();
-    EvolveResult r = evolve(*models.full, {}, eo, {}, models.rough ? &*models.rough : nullptr);
+    EvolveResult r = evolve(models.full, {}, eo, {}, models.rough ? &*models.rough : nullptr);
     trees[k] = library.adopt(r.best);
     out.partitions[k] = {part.primitives, part.points.size(), r.generations, r.best.nodeCount(),
                          secondsSince(t)};
@@ -133,11 +118,10 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
     std::vector<CsgTree> seeds;
     if (!merged.empty()) seeds.push_back(merged);
     seeds.insert(seeds.end(), trees.begin(), trees.end());
-    out.search =
-        evolve(*whole.full, seeds, eo, onGeneration, whole.rough ? &*whole.rough : nullptr);
+    out.search = evolve(whole, seeds, eo, onGeneration, wholeRough ? &*wholeRough : nullptr);
   } else {
-    out.search.best = removeRedundancy(merged, *whole.full);
-    out.search.fitness = whole.full->evaluate(out.search.best);
+    out.search.best = removeRedundancy(merged, whole);
+    out.search.fitness = whole.evaluate(out.search.best);
   }
   out.finalSeconds = secondsSince(finalStart);
   out.search.seconds = secondsSince(start);

@@ -340,12 +340,6 @@ void requireUsableBox(const Aabb& box) {
   }
 }
 
-Aabb grownBox(Aabb box, double by) {
-  box.min.array() -= by;
-  box.max.array() += by;
-  return box;
-}
-
 }  // namespace
 
 std::vector<GpPrimitive> readGpPrimitives(std::istream& in, const std::string& source) {
@@ -429,7 +423,7 @@ Aabb gpClipBox(std::span<const GpPrimitive> primitives, double margin) {
         p.shape);
   }
   const double diagonal = box.diagonal();
-  return grownBox(box, diagonal > 0.0 ? margin * diagonal : 1.0);
+  return box.grown(diagonal > 0.0 ? margin * diagonal : 1.0);
 }
 
 Aabb gpScanClipBox(const Aabb& scanBounds, double margin) {
@@ -440,7 +434,7 @@ Aabb gpScanClipBox(const Aabb& scanBounds, double margin) {
   if (!(margin > 0.0) || !std::isfinite(margin)) {
     throw std::invalid_argument("gpScanClipBox: margin must be finite and > 0");
   }
-  return grownBox(scanBounds, margin * scanBounds.diagonal());
+  return scanBounds.grown(margin * scanBounds.diagonal());
 }
 
 GpImport importGp(const std::filesystem::path& fit, const std::filesystem::path& expression,

@@ -1,6 +1,5 @@
 #include "io/scad_export.h"
 
-#include <array>
 #include <cmath>
 #include <numbers>
 #include <ostream>
@@ -8,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/export_extent.h"
 #include "io/file_util.h"
 #include "io/tree_names.h"
 
@@ -49,47 +49,22 @@ std::string rotateEuler(const Mat3& r) {
   return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
 }
 
-// The box described with the permutation/flip of its axes closest to the
-// world axes, so axis-aligned boxes need no rotation at all.
-Box canonicalBox(const Box& box) {
-  static const std::array<std::array<int, 3>, 6> perms = {
-      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
-  Box best = box;
-  double bestTrace = -1e300;
-  for (const auto& perm : perms) {
-    for (int signs = 0; signs < 8; ++signs) {
-      Box b = box;
-      for (int i = 0; i < 3; ++i) {
-        b.axes.col(i) = box.axes.col(perm[i]) * ((signs >> i) & 1 ? -1.0 : 1.0);
-        b.halfSize[i] = box.halfSize[perm[i]];
-      }
-      if (b.axes.determinant() <= 0.0) continue;
-      if (b.axes.trace() > bestTrace + 1e-12) {
-        bestTrace = b.axes.trace();
-        best = b;
-      }
-    }
-  }
-  return best;
-}
-
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
-  Aabb part;           // bounds of the bounded primitives
-  double bigSize = 0;  // edge of the boxes standing in for unbounded sets
+  Aabb part;           // the part's extent (exportExtent)
+  double bigSize = 0;  // edge of the cubes standing in for unbounded sets
 
-  std::string bigBox(const Mat3& frame, const Vec3& center, const Vec3& size) const {
-    return translate(center) + rotateEuler(frame) + "cube(" + vec(size) + ", center = true);";
+  std::string cube(const StandInCube& c) const {
+    return translate(c.center) + rotateEuler(c.frame) + "cube(" + vec(Vec3::Constant(c.edge)) +
+           ", center = true);";
   }
 
   std::string body(const Primitive& p) const {
     if (const auto* h = p.as<HalfSpace>()) {
       // A slab of the half-space covering the part: its top face is the plane.
-      const Vec3 onPlane = part.center() - (h->normal.dot(part.center()) - h->offset) * h->normal;
-      return bigBox(frameFromAxis(h->normal), onPlane - 0.5 * bigSize * h->normal,
-                    Vec3::Constant(bigSize)) +
-             "  // halfspace " + vec(h->normal) + ".x <= " + formatNumber(h->offset);
+      return cube(halfSpaceCube(*h, part, bigSize)) + "  // halfspace " + vec(h->normal) +
+             ".x <= " + formatNumber(h->offset);
     }
     if (const auto* b0 = p.as<Box>()) {
       const Box b = canonicalBox(*b0);
@@ -124,7 +99,7 @@ struct Writer {
         return;
       case NodeKind::Complement:
         out << pad << "difference() {\n"
-            << pad << "  " << bigBox(Mat3::Identity(), part.center(), Vec3::Constant(bigSize))
+            << pad << "  " << cube(surroundingCube(part, bigSize))
             << "  // everything around the part\n";
         node(*n.children.front(), indent + 1);
         out << pad << "}\n";
@@ -140,16 +115,7 @@ struct Writer {
 }  // namespace
 
 void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options) {
-  if (tree.empty()) throw std::invalid_argument("cannot export an empty tree");
-  Aabb part;
-  for (const Node* leaf : tree.leaves()) {
-    if (leaf->primitive.isBounded()) part.extend(leaf->primitive.bounds());
-  }
-  const Aabb solid = tree.bounds();
-  if (solid.isBounded()) part = part.isBounded() ? part.intersected(solid) : solid;
-  if (!part.isBounded() || part.isEmpty()) {
-    throw std::invalid_argument("the tree has no bounded primitive to size its half-spaces by");
-  }
+  const Aabb part = exportExtent(tree);
   const auto names = leafNames(tree);
   Writer w{out, names, part, options.halfSpaceScale * std::max(part.diagonal(), 1e-9)};
   out << "// CSG tree written by csgvox. Units are those of the scan.\n"

@@ -3,8 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <array>
-#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -106,37 +104,6 @@ FitMetrics evaluateFit(const CsgTree& tree, const PointCloud& scan, const FitOpt
     m.normalsWithin10Deg = double(aligned) / double(n);
   }
   return m;
-}
-
-double volumetricIou(const CsgTree& a, const CsgTree& b, int resolution) {
-  if (a.empty() || b.empty()) throw std::invalid_argument("volumetricIou: an empty tree");
-  if (resolution < 2) throw std::invalid_argument("volumetricIou: resolution < 2");
-  Aabb box = a.bounds();
-  box.extend(b.bounds());
-  if (box.isEmpty()) return 1.0;
-  if (!box.isBounded()) throw std::invalid_argument("volumetricIou: an unbounded solid");
-  const double step = box.size().maxCoeff() / resolution;
-  std::array<int, 3> n;
-  for (int k = 0; k < 3; ++k) n[k] = std::max(1, int(std::ceil(box.size()[k] / step)));
-  // Irrational offsets within the cells: the samples never line up with the
-  // faces of parts dimensioned in round numbers, which would decide whole
-  // layers of samples by rounding.
-  const Vec3 offset(0.6180339887, 0.4142135624, 0.7320508076);
-  std::atomic<std::size_t> both{0}, either{0};
-  tbb::parallel_for(0, n[2], [&](int k) {
-    std::size_t inBoth = 0, inEither = 0;
-    for (int j = 0; j < n[1]; ++j) {
-      for (int i = 0; i < n[0]; ++i) {
-        const Vec3 p = box.min + step * (Vec3(i, j, k) + offset);
-        const bool x = a.contains(p), y = b.contains(p);
-        inBoth += x && y;
-        inEither += x || y;
-      }
-    }
-    both += inBoth;
-    either += inEither;
-  });
-  return either ? double(both) / double(either) : 1.0;
 }
 
 }  // namespace csgvox

@@ -39,12 +39,4 @@ struct FitMetrics {
 /// @throw std::invalid_argument if the scan is empty or the tree cannot be sampled.
 FitMetrics evaluateFit(const CsgTree& tree, const PointCloud& scan, const FitOptions& options = {});
 
-/// Volumetric IoU of two solids: both classified at one point per cell of a
-/// lattice of `resolution` cells along the longest side of the box holding
-/// both (their bounds), at the same irrational offset in every cell; 1 when
-/// both are empty. Deterministic.
-/// @throw std::invalid_argument when a tree is empty or unbounded, or
-///        resolution < 2.
-double volumetricIou(const CsgTree& a, const CsgTree& b, int resolution = 200);
-
 }  // namespace csgvox

@@ -20,16 +20,9 @@ GpResult runGp(const PointCloud& scan, std::span<const Surface> surfaces, const 
   } else {
     const FitnessModel model(scan.points, scan.normals, diagonal, out.primitives.library,
                              options.fitness, target);
-    std::optional<FitnessModel> rough;
-    if (options.roughPoints > 0 && scan.size() > options.roughPoints) {
-      std::vector<Vec3> points, normals;
-      for (const std::uint32_t i :
-           spreadSample(scan.size(), options.roughPoints, options.evolve.seed)) {
-        points.push_back(scan.points[i]);
-        normals.push_back(scan.normals[i]);
-      }
-      rough.emplace(points, normals, diagonal, out.primitives.library, options.fitness, target);
-    }
+    const std::optional<FitnessModel> rough =
+        roughModel(scan.points, scan.normals, diagonal, out.primitives.library, options.fitness,
+                   target, options.roughPoints, options.evolve.seed);
     out.search = evolve(model, {}, options.evolve, onGeneration, rough ? &*rough : nullptr);
   }
   out.tree = out.search.best;

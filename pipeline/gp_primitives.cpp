@@ -27,11 +27,9 @@ GpPrimitives gpPrimitives(const PointCloud& scan, std::span<const Surface> surfa
   if (scan.points.empty()) throw std::invalid_argument("gpPrimitives: the scan is empty");
   if (surfaces.empty()) throw std::invalid_argument("gpPrimitives: no surfaces");
   GpPrimitives out;
-  Aabb box = scan.bounds();
+  const Aabb box = scan.bounds();
   const double diagonal = box.diagonal();
-  box.min -= Vec3::Constant(options.clipMargin * diagonal);
-  box.max += Vec3::Constant(options.clipMargin * diagonal);
-  out.clipBox = box;
+  out.clipBox = box.grown(options.clipMargin * diagonal);
 
   std::vector<Primitive> primitives;
   std::vector<std::string> names;

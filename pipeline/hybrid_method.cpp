@@ -10,8 +10,10 @@
 #include <stdexcept>
 
 #include "core/sardf.h"
+#include "core/seed.h"
 #include "evolve/point_regions.h"
 #include "evolve/redundancy.h"
+#include "voxel/description_sets.h"
 
 namespace csgvox {
 namespace {
@@ -37,17 +39,7 @@ CsgTree uniteAll(const std::vector<CsgTree>& trees) {
   return trees.size() == 1 ? trees.front() : CsgTree::unite(trees);
 }
 
-Aabb grown(Aabb box, double margin) {
-  if (!box.isEmpty()) {
-    box.min.array() -= margin;
-    box.max.array() += margin;
-  }
-  return box;
-}
-
-bool meets(const Aabb& a, const Aabb& b) {
-  return !a.isEmpty() && !b.isEmpty() && !a.intersected(b).isEmpty();
-}
+bool meets(const Aabb& a, const Aabb& b) { return !a.intersected(b).isEmpty(); }
 
 // Points farther than `distance` from the tree's surface, or whose normal is
 // further than `angle` (radians) from the field's outward direction.
@@ -76,16 +68,16 @@ struct Region {
   std::vector<std::size_t> members;
 };
 
-// The members whose bounds meet the box, growing the box by each one taken,
-// until no member is added.
-void selectMembers(Region& region, std::span<const Aabb> memberBounds, double margin) {
+// The members whose (grown) bounds meet the box, growing the box by each
+// one taken, until no member is added.
+void selectMembers(Region& region, std::span<const Aabb> memberBounds) {
   std::vector<char> taken(memberBounds.size(), 0);
   for (bool added = true; added;) {
     added = false;
     for (std::size_t m = 0; m < memberBounds.size(); ++m) {
-      if (taken[m] || !meets(region.box, grown(memberBounds[m], margin))) continue;
+      if (taken[m] || !meets(region.box, memberBounds[m])) continue;
       taken[m] = 1;
-      region.box.extend(grown(memberBounds[m], margin));
+      region.box.extend(memberBounds[m]);
       added = true;
     }
   }
@@ -94,22 +86,20 @@ void selectMembers(Region& region, std::span<const Aabb> memberBounds, double ma
     if (taken[m]) region.members.push_back(m);
 }
 
-// Regions sharing a member become one (in order of their first point).
-std::vector<Region> joinSharingRegions(std::vector<Region> regions,
-                                       std::span<const Aabb> memberBounds, double margin) {
+// Regions whose boxes meet become one (in order of their first point): a
+// region's box holds its members' bounds, so regions sharing a member are
+// joined too, and the regions left are independent.
+std::vector<Region> joinMeetingRegions(std::vector<Region> regions,
+                                       std::span<const Aabb> memberBounds) {
   for (bool joined = true; joined;) {
     joined = false;
     for (std::size_t a = 0; a < regions.size() && !joined; ++a) {
       for (std::size_t b = a + 1; b < regions.size() && !joined; ++b) {
-        std::vector<std::size_t> common;
-        std::set_intersection(regions[a].members.begin(), regions[a].members.end(),
-                              regions[b].members.begin(), regions[b].members.end(),
-                              std::back_inserter(common));
-        if (common.empty() && !meets(regions[a].box, regions[b].box)) continue;
+        if (!meets(regions[a].box, regions[b].box)) continue;
         regions[a].bad.insert(regions[a].bad.end(), regions[b].bad.begin(), regions[b].bad.end());
         std::sort(regions[a].bad.begin(), regions[a].bad.end());
         regions[a].box.extend(regions[b].box);
-        selectMembers(regions[a], memberBounds, margin);
+        selectMembers(regions[a], memberBounds);
         regions.erase(regions.begin() + std::ptrdiff_t(b));
         joined = true;
       }
@@ -118,23 +108,9 @@ std::vector<Region> joinSharingRegions(std::vector<Region> regions,
   return regions;
 }
 
-// A seed per region, spread by SplitMix64's finaliser.
-std::uint64_t regionSeed(std::uint64_t seed, std::size_t index) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (index + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
 // The voxels whose centre lies in the box.
 VoxelSet voxelsIn(const VoxelGrid& grid, const Aabb& box) {
-  VoxelSet out(grid.voxelCount());
-  const auto& d = grid.dims();
-  for (int k = 0; k < d[2]; ++k)
-    for (int j = 0; j < d[1]; ++j)
-      for (int i = 0; i < d[0]; ++i)
-        if (box.contains(grid.center(i, j, k))) out.set(grid.index(i, j, k));
-  return out;
+  return solidVoxels(CsgTree::leaf(Box{box.center(), Mat3::Identity(), 0.5 * box.size()}), grid);
 }
 
 // What a region's search found.
@@ -163,9 +139,10 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const CsgTree& t = candidates[c].tree;
     if (!meets(t.bounds(), region.box)) continue;
+    const std::vector<const Node*> leaves = t.leaves();
     std::size_t near = 0;
     for (const std::uint32_t i : region.bad) {
-      for (const Node* leaf : t.leaves()) {
+      for (const Node* leaf : leaves) {
         if (std::abs(leaf->primitive.value(scan.points[i])) <= 2.0 * tolerance) {
           ++near;
           break;
@@ -202,15 +179,8 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   const VoxelTarget target{grid, inside & voxelsIn(grid, region.box)};
   const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
   const FitnessModel model(points, normals, diagonal, library, options.fitness, t);
-  std::optional<FitnessModel> rough;
-  if (options.roughPoints > 0 && points.size() > options.roughPoints) {
-    std::vector<Vec3> rp, rn;
-    for (const std::uint32_t i : spreadSample(points.size(), options.roughPoints, seed)) {
-      rp.push_back(points[i]);
-      rn.push_back(normals[i]);
-    }
-    rough.emplace(rp, rn, diagonal, library, options.fitness, t);
-  }
+  const std::optional<FitnessModel> rough =
+      roughModel(points, normals, diagonal, library, options.fitness, t, options.roughPoints, seed);
 
   // Seeds: the subtree, and the subtree with one fitting candidate added or
   // taken away.
@@ -271,9 +241,9 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
 
   // Regions of bad points, each with the members of the tree around it.
   const std::vector<CsgTree> members = unionMembers(tree);
-  std::vector<Aabb> memberBounds;
-  for (const CsgTree& m : members) memberBounds.push_back(m.bounds());
   const double margin = options.margin * voxel;
+  std::vector<Aabb> memberBounds;
+  for (const CsgTree& m : members) memberBounds.push_back(m.bounds().grown(margin));
   const auto least = std::max<std::size_t>(
       10, std::size_t(std::ceil(options.minRegionPoints * double(scan.size()))));
   std::vector<Region> regions;
@@ -282,68 +252,62 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     if (points.size() < least) continue;
     Region r;
     for (const std::uint32_t i : points) r.box.extend(scan.points[i]);
-    r.box = grown(r.box, margin);
+    r.box = r.box.grown(margin);
     r.bad = std::move(points);
-    selectMembers(r, memberBounds, margin);
+    selectMembers(r, memberBounds);
     regions.push_back(std::move(r));
   }
-  regions = joinSharingRegions(std::move(regions), memberBounds, margin);
+  regions = joinMeetingRegions(std::move(regions), memberBounds);
 
   // The regions' searches, in parallel; each is deterministic for its seed.
   std::vector<RegionSearch> found(regions.size());
   const double left = timeLimit > 0.0 ? std::max(timeLimit - secondsSince(start), 1e-3) : 0.0;
   tbb::parallel_for(std::size_t{0}, regions.size(), [&](std::size_t k) {
     found[k] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
-                            regionSeed(options.evolve.seed, k), left);
+                            mixSeed(options.evolve.seed, k), left);
   });
 
-  // One model of the whole tree on all points, over every primitive any
-  // result may hold, judges each replacement in turn.
-  std::vector<Primitive> primitives;
-  std::vector<std::string> names;
-  const auto add = [&](const CsgTree& t) {
-    for (const Node* leaf : t.leaves()) {
-      if (std::find(primitives.begin(), primitives.end(), leaf->primitive) != primitives.end())
-        continue;
-      primitives.push_back(leaf->primitive);
-      names.push_back(leaf->name);
+  // The tree with the refined subtrees of the accepted regions and of
+  // region `trial` in place of their members (regions are disjoint in
+  // members; a region's refined subtree takes its first member's place).
+  std::vector<std::ptrdiff_t> regionOf(members.size(), -1);
+  for (std::size_t k = 0; k < regions.size(); ++k)
+    for (const std::size_t m : regions[k].members) regionOf[m] = std::ptrdiff_t(k);
+  std::vector<char> accepted(found.size(), 0);
+  const auto assemble = [&](std::ptrdiff_t trial) {
+    std::vector<CsgTree> parts;
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      const std::ptrdiff_t k = regionOf[m];
+      if (k < 0 || (!accepted[std::size_t(k)] && k != trial)) {
+        parts.push_back(members[m]);
+      } else if (m == regions[std::size_t(k)].members.front()) {
+        parts.push_back(found[std::size_t(k)].refined);
+      }
     }
+    return normalizeTree(uniteAll(parts));
   };
-  add(tree);
-  for (const RegionSearch& f : found) add(f.refined);
-  const PrimitiveLibrary library(std::move(primitives), std::move(names));
+
+  // One model of the whole tree on all points, over its primitives and those
+  // of every subtree its region's search improved, judges each replacement.
+  std::vector<CsgTree> all = {tree};
+  for (const RegionSearch& f : found)
+    if (f.report.localAfter > f.report.localBefore) all.push_back(f.refined);
+  const PrimitiveLibrary library = PrimitiveLibrary::ofTree(uniteAll(all));
   const VoxelTarget target{grid, inside};
   const FitnessModel model(scan.points, scan.normals, diagonal, library, options.fitness,
                            options.fitness.voxelWeight > 0.0 ? &target : nullptr);
-  std::vector<CsgTree> current = members;  // members; a replaced region's first one holds it
   out.before = model.evaluate(library.adopt(tree));
   Fitness best = out.before;
   for (std::size_t k = 0; k < found.size(); ++k) {
     HybridRegion& h = found[k].report;
-    if (!(h.localAfter > h.localBefore)) {
-      out.regions.push_back(h);
-      continue;
-    }
-    std::vector<CsgTree> next;
-    for (std::size_t m = 0; m < current.size(); ++m) {
-      if (current[m].empty()) continue;
-      if (!std::binary_search(regions[k].members.begin(), regions[k].members.end(), m)) {
-        next.push_back(current[m]);
-      } else if (m == regions[k].members.front()) {
-        next.push_back(found[k].refined);
+    if (h.localAfter > h.localBefore) {
+      const Fitness f = model.evaluate(library.adopt(assemble(std::ptrdiff_t(k))));
+      if (f.total > best.total + options.minGain * double(scan.size())) {
+        best = f;
+        h.replaced = true;
+        accepted[k] = 1;
+        ++out.replaced;
       }
-    }
-    const CsgTree candidate = library.adopt(normalizeTree(uniteAll(next)));
-    const Fitness f = model.evaluate(candidate);
-    if (f.total > best.total + options.minGain * double(scan.size())) {
-      best = f;
-      h.replaced = true;
-      ++out.replaced;
-      // Keep member indices valid: the region's other members become the
-      // refined subtree too, so later regions (disjoint in members) still
-      // find theirs in place.
-      for (const std::size_t m : regions[k].members)
-        current[m] = m == regions[k].members.front() ? found[k].refined : CsgTree{};
     }
     out.regions.push_back(h);
   }
@@ -353,10 +317,7 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     out.after = out.before;
     return out;
   }
-  std::vector<CsgTree> kept;
-  for (const CsgTree& m : current)
-    if (!m.empty()) kept.push_back(m);
-  out.tree = library.adopt(normalizeTree(uniteAll(kept)));
+  out.tree = library.adopt(assemble(-1));
   // Redundancy removal evaluates the tree once per node and operand on all
   // points: skipped once the time limit is spent.
   if (timeLimit <= 0.0 || secondsSince(start) < timeLimit) {

@@ -5,19 +5,17 @@
 /// Points the tree explains badly (farther than εd from its surface, or with
 /// a normal off by more than badAngle) are grouped into regions; the union
 /// members of the tree whose bounds meet a region (with the members meeting
-/// those, until none is added) are its subtree. Regions sharing a member are
-/// one. Each region's subtree is searched again by the genetic search, seeded
-/// with the subtree and its one-step variants (∪ or − one candidate), over
-/// the subtree's primitives and the bounded candidates that fit the region's
-/// points — including those the voxel stage dropped — with Eq. 7 on the
-/// points around it plus the voxel term there (min/max field by default:
-/// on clean scans SARDF gives the same fitness at several times the cost). Regions are
-/// independent, so they run in parallel. A refined subtree replaces the
-/// original only when the whole tree's fitness on all points improves (by
-/// more than minGain·N, so noise alone does not swap primitives), so the
-/// result is never worse than the voxel tree by that measure; last, when a
-/// subtree was replaced, redundant nodes of the whole tree are removed. When
-/// none was, the result is the input tree itself.
+/// those, until none is added) are its subtree. Regions whose boxes meet
+/// (regions sharing a member do) are one. Each region's subtree is searched again by the genetic
+/// search, seeded with the subtree and its one-step variants (∪ or − one candidate), over the
+/// subtree's primitives and the bounded candidates that fit the region's points — including those
+/// the voxel stage dropped — with Eq. 7 on the points around it plus the voxel term there (min/max
+/// field by default: on clean scans SARDF gives the same fitness at several times the cost).
+/// Regions are independent, so they run in parallel. A refined subtree replaces the original only
+/// when the whole tree's fitness on all points improves (by more than minGain·N, so noise alone
+/// does not swap primitives), so the result is never worse than the voxel tree by that measure;
+/// last, when a subtree was replaced, redundant nodes of the whole tree are removed. When none was,
+/// the result is the input tree itself.
 
 #include <cstddef>
 #include <span>

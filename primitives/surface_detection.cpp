@@ -19,6 +19,7 @@
 
 #include "core/nearest_neighbors.h"
 #include "core/principal_axes.h"
+#include "core/seed.h"
 #include "core/statistics.h"
 #include "primitives/cgal_kernel.h"
 #include "primitives/surface_refinement.h"
@@ -61,12 +62,8 @@ class ScopedCgalSeed {
   CGAL::Random saved_;
 };
 
-unsigned int mixSeed(std::uint64_t seed, int pass) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * std::uint64_t(pass + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
-  return static_cast<unsigned int>(z & 0x7fffffffu);
+unsigned int passSeed(std::uint64_t seed, int pass) {
+  return static_cast<unsigned int>(mixSeed(seed, std::uint64_t(pass)) & 0x7fffffffu);
 }
 
 // Indices 0, stride, 2*stride, ... covering at most `count` points.
@@ -674,7 +671,7 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
     const std::function<bool(Surface&)> accept = [&](Surface& surf) {
       return selectModel(cloud, options, scales, result.epsilon, diag, surf);
     };
-    if (!ransacPass(cloud, subset, stages[stage].types, params, mixSeed(options.seed, int(stage)),
+    if (!ransacPass(cloud, subset, stages[stage].types, params, passSeed(options.seed, int(stage)),
                     diag, cb, accept, found)) {
       return cancelled();
     }

@@ -6,30 +6,12 @@
 // uniform random points).
 
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "core/csg_tree.h"
+#include "core/solid_sampling.h"
 
 namespace csgvox::test {
-
-/// The sample points: one uniform random point per grid cell of `box`.
-inline std::vector<Vec3> stratifiedPoints(const Aabb& box, int n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Vec3 cell = box.size() / double(n);
-  std::vector<Vec3> points;
-  points.reserve(std::size_t(n) * n * n);
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        points.push_back(box.min + Vec3((i + u(rng)) * cell.x(), (j + u(rng)) * cell.y(),
-                                        (k + u(rng)) * cell.z()));
-      }
-    }
-  }
-  return points;
-}
 
 /// What sampling a solid found.
 struct SolidSample {

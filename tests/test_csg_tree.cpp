@@ -323,7 +323,7 @@ TEST(CsgTree, BoundsContainTheSolid) {
     const Aabb b = tree.bounds();
     Aabb sampleBox;
     for (const Node* leaf : tree.leaves()) sampleBox.extend(leaf->primitive.bounds());
-    sampleBox = test::grown(sampleBox, 0.5);
+    sampleBox = sampleBox.grown(0.5);
     for (int i = 0; i < 500; ++i) {
       const Vec3 p = test::randomPoint(rng, sampleBox);
       if (!tree.contains(p)) continue;
@@ -471,7 +471,7 @@ TEST(CsgTree, EditsShareSubtreesAndLeaveTheOldTreeUnchanged) {
 // and near the surface (the edge-crossing and sharpening paths of the mesher).
 std::vector<Vec3> probePoints(const CsgTree& tree, Rng& rng, int count) {
   const Aabb b = tree.bounds();
-  const Aabb box = test::grown(b, 0.25 * b.size().maxCoeff());
+  const Aabb box = b.grown(0.25 * b.size().maxCoeff());
   std::vector<Vec3> points;
   for (int i = 0; i < count; ++i) points.push_back(test::randomPoint(rng, box));
   return points;

@@ -42,8 +42,7 @@ TEST_F(CsgFile, EveryBundledPartReadsBackAsTheSameSolid) {
     const CsgTree back = readCsg(path);
     EXPECT_EQ(back.primitiveCount(), tree.primitiveCount());
     const Aabb extent = exportExtent(tree);
-    const double iou =
-        test::stratifiedIou(tree, back, test::grown(extent, 0.02 * extent.diagonal()));
+    const double iou = test::stratifiedIou(tree, back, extent.grown(0.02 * extent.diagonal()));
     EXPECT_GE(iou, 0.999);
   }
 }
@@ -89,7 +88,7 @@ TEST(CsgFormat, HalfSpacesBecomeCubesWhoseTopFaceIsThePlane) {
   test::expectNear(standIn->axes.col(2), Vec3(1, 1, 0).normalized(), 1e-12);
   EXPECT_NEAR(standIn->center.dot(Vec3(1, 1, 0).normalized()) + standIn->halfSize.z(), 0.25, 1e-9);
   EXPECT_GE(standIn->halfSize.minCoeff(), 2 * std::sqrt(3.0) - 1e-9);  // the diagonal
-  EXPECT_GE(test::stratifiedIou(tree, back, test::grown(exportExtent(tree), 0.5), 40), 0.999);
+  EXPECT_GE(test::stratifiedIou(tree, back, exportExtent(tree).grown(0.5), 40), 0.999);
 }
 
 TEST(CsgReader, ReadsOpenScadsOwnSpellings) {

@@ -43,7 +43,7 @@ TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {
     writeStep(dir_ / (part + ".step"), tree);
     writeCsg(dir_ / (part + ".csg"), tree);
     const Aabb extent = exportExtent(tree);
-    volumes[part] = test::sampleSolid(tree, test::grown(extent, 0.01 * extent.diagonal())).volume;
+    volumes[part] = test::sampleSolid(tree, extent.grown(0.01 * extent.diagonal())).volume;
     trees.emplace(part, tree);
     list << part << "\n";
   }

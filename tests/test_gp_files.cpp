@@ -196,9 +196,7 @@ TEST(GpFiles, ImportIntersectsWithTheClipBox) {
   const CsgTree bare =
       readGpExpression(kGpDir / "cube_expr.txt", imported.primitives, imported.box);
   Rng rng(5);
-  Aabb around = imported.box;
-  around.min.array() -= 1.0;
-  around.max.array() += 1.0;
+  const Aabb around = imported.box.grown(1.0);
   for (int i = 0; i < 2000; ++i) {
     const Vec3 p = randomPoint(rng, around);
     EXPECT_EQ(tree.value(p), std::min(bare.value(p), boxValue(imported.box, p)));

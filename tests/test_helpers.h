@@ -96,14 +96,6 @@ double sampledIou(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint6
   return either ? double(both) / double(either) : 1.0;
 }
 
-/// The box grown by `margin` on every side.
-inline Aabb grown(const Aabb& box, double margin) {
-  Aabb b = box;
-  b.min.array() -= margin;
-  b.max.array() += margin;
-  return b;
-}
-
 /// A random, valid primitive of the given type: centre in [-2,2]^3, random
 /// orientation, sizes in [0.5, 2] (the torus keeps minor < major).
 inline Primitive randomPrimitive(PrimitiveType type, Rng& rng) {
@@ -379,7 +371,7 @@ inline ::testing::AssertionResult treesEquivalent(const CsgTree& a, const CsgTre
   if (!box.isBounded()) {
     box = fallback;
   } else {
-    box = grown(box, 0.1 * box.diagonal());
+    box = box.grown(0.1 * box.diagonal());
   }
   Rng rng(seed);
   int counted = 0, inA = 0, inB = 0;

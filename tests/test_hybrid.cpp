@@ -7,10 +7,10 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_helpers.h"
+#include "core/solid_sampling.h"
 #include "evolve/point_regions.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
-#include "mesh/fit_metrics.h"
 #include "mesh/surface_sampler.h"
 #include "pipeline/hybrid_method.h"
 #include "pipeline/reconstruct.h"

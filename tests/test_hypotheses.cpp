@@ -347,8 +347,7 @@ TEST(Hypotheses, DuplicatesAreRemoved) {
         const Primitive& a = leaves[i]->tree.root()->primitive;
         const Primitive& b = leaves[j]->tree.root()->primitive;
         if (a.type() != b.type()) continue;
-        EXPECT_FALSE(
-            sameShape(a, b, test::grown(g.tree.bounds(), 0.1 * g.diagonal), 0.002 * g.diagonal))
+        EXPECT_FALSE(sameShape(a, b, g.tree.bounds().grown(0.1 * g.diagonal), 0.002 * g.diagonal))
             << part << ": candidates " << i << " and " << j << " are the same "
             << primitiveTypeName(a.type());
       }
@@ -465,7 +464,7 @@ TEST(Hypotheses, CandidatesTurnWithTheScan) {
     EXPECT_EQ(a.stats.cuboids.considered, b.stats.cuboids.considered) << part;
     EXPECT_EQ(a.stats.cuboids.kept, b.stats.cuboids.kept) << part;
     // Each turned candidate has a counterpart among the original ones.
-    const Aabb box = test::grown(gt.tree.bounds(), 0.05 * gt.diagonal);
+    const Aabb box = gt.tree.bounds().grown(0.05 * gt.diagonal);
     const double tol = 1e-3 * gt.diagonal;
     for (const Candidate& cb : b.candidates) {
       bool found = false;

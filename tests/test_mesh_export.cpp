@@ -208,7 +208,7 @@ TEST_P(MeshPrimitive, VerticesLieOnTheSurface) {
   double worst = 0.0;
   for (const Vec3& v : mesh.vertices) worst = std::max(worst, std::abs(c.tree.value(v)));
   EXPECT_LT(worst, 0.5 * voxel);
-  const Aabb grown = test::grown(c.tree.bounds(), voxel);
+  const Aabb grown = c.tree.bounds().grown(voxel);
   EXPECT_TRUE(grown.contains(mesh.bounds().min) && grown.contains(mesh.bounds().max));
 }
 
@@ -598,7 +598,7 @@ TEST(MeshSolid, AgreesWithTheTreeItWasMeshedFrom) {
   const double voxel = tree.bounds().size().maxCoeff() / 160.0;
   const MeshSolid solid(mesh, voxel);
   EXPECT_EQ(solid.voxelSize(), voxel);
-  const Aabb box = test::grown(tree.bounds(), 0.05 * tree.bounds().diagonal());
+  const Aabb box = tree.bounds().grown(0.05 * tree.bounds().diagonal());
   Rng rng(5);
   constexpr int kSamples = 200'000;
   int agree = 0;

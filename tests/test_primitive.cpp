@@ -250,7 +250,7 @@ class PrimitiveShapes : public ::testing::TestWithParam<ShapeCase> {
   Aabb queryBox() const {
     const Aabb b = prim().bounds();
     if (!b.isBounded()) return Aabb{Vec3::Constant(-1.5), Vec3::Constant(1.5)};
-    return test::grown(b, 0.3 * b.diagonal());
+    return b.grown(0.3 * b.diagonal());
   }
   double scale() const {
     const Aabb b = prim().bounds();
@@ -381,7 +381,7 @@ TEST_P(PrimitiveShapes, SurfaceAreaMatchesMonteCarlo) {
     return;
   }
   const double eps = 0.004 * scale();
-  const Aabb b = test::grown(prim().bounds(), eps);
+  const Aabb b = prim().bounds().grown(eps);
   const double boxVolume = b.size().prod();
   Rng rng(16);
   const int n = 400000;

@@ -532,7 +532,7 @@ TEST(SardfOperations, TreesKeepTheirSolidAndStayNearMinMax) {
   int inside = 0, outside = 0;
   for (int t = 0; t < 30; ++t) {
     const CsgTree tree = test::randomTree(rng, 2 + t % 6);
-    Aabb box = test::grown(tree.leaves().front()->primitive.bounds(), 1.0);
+    Aabb box = tree.leaves().front()->primitive.bounds().grown(1.0);
     for (const Node* leaf : tree.leaves()) box.extend(leaf->primitive.bounds());
     const SardfOperations ops(sardfRadius(box.diagonal()));
     // Each of the n = leaves − 1 binary operations moves the value by at most

@@ -157,7 +157,7 @@ TEST(SetOperations, TreesHaveTheSameZeroSetUnderEveryImplementation) {
   int inside = 0, outside = 0;
   for (int t = 0; t < 20; ++t) {
     const CsgTree tree = test::randomTree(rng, 2 + t % 5);
-    Aabb box = test::grown(tree.leaves().front()->primitive.bounds(), 1.0);
+    Aabb box = tree.leaves().front()->primitive.bounds().grown(1.0);
     for (const Node* leaf : tree.leaves()) box.extend(leaf->primitive.bounds());
     for (int i = 0; i < 300; ++i) {
       const Vec3 p = test::randomPoint(rng, box);

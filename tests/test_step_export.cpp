@@ -49,7 +49,7 @@ TEST_F(StepExport, EveryBundledPartIsOneValidSolidWithTheTreesVolumeAndBounds) {
 
     const Aabb extent = exportExtent(tree);
     const test::SolidSample sample =
-        test::sampleSolid(tree, test::grown(extent, 0.01 * extent.diagonal()), 100);
+        test::sampleSolid(tree, extent.grown(0.01 * extent.diagonal()), 100);
     const double volumeError = read.volume / sample.volume - 1.0;
     EXPECT_LT(std::abs(volumeError), 0.005) << read.volume << " vs sampled " << sample.volume;
     EXPECT_NEAR(read.volume, written.volume, 1e-6 * written.volume);

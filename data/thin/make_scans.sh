@@ -5,12 +5,4 @@
 # Usage: data/thin/make_scans.sh [path/to/csgvox]
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
-csgvox=${1:-"$here/../../build/app/csgvox"}
-seed=101
-for tree in "$here"/*/tree.json; do
-  part=$(dirname "$tree")
-  "$csgvox" sample "$tree" -o "$part/scan.ply" --points 20000 --seed "$seed" --quiet
-  "$csgvox" sample "$tree" -o "$part/scan_noisy.ply" --points 20000 --noise 0.005 \
-    --seed $((seed + 1000)) --quiet
-  seed=$((seed + 1))
-done
+PARTS=$here POINTS=20000 SEED=101 exec "$here/../make_scans.sh" "${1:-"$here/../../build/app/csgvox"}"
