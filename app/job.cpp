@@ -298,6 +298,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                            {"primitives_before", r.primitivesBefore},
                            {"primitives_after", r.primitivesAfter},
                            {"replaced", r.replaced},
+                           {"verdict", regionVerdictName(r.verdict)},
                            {"seconds", r.seconds}});
       }
       report["refinement"] = {{"bad_points", h.badPoints},
@@ -306,7 +307,12 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                               {"fitness_before", h.before.total},
                               {"fitness_after", h.after.total},
                               {"primitives_before", h.primitivesBefore},
-                              {"primitives_after", h.primitivesAfter}};
+                              {"primitives_after", h.primitivesAfter},
+                              {"ghost_points_before", h.ghostBefore},
+                              {"ghost_points_after", h.ghostAfter},
+                              {"boundary_area", h.area},
+                              {"unsupported_area_before", h.unsupportedBefore},
+                              {"unsupported_area_after", h.unsupportedAfter}};
     }
   } else {
     const EvolveResult& s = rec.gp.search;

@@ -173,6 +173,10 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
         next.push_back(tournament(rng, population, options.tournament));
       }
     }
+    if (options.normalizeOffspring) {
+      for (std::size_t k = options.elites; k < next.size(); ++k)
+        next[k].tree = normalizeTree(next[k].tree);
+    }
     population.swap(next);
     evaluator.evaluate(population, result.evaluations);
     order = ranking(population);

@@ -34,6 +34,8 @@ struct EvolveOptions {
   double timeLimit = 0.0;              ///< seconds (0: none); the best tree so far is kept
   std::uint64_t seed = 1;              ///< seeds every random choice
   VariationOptions variation;          ///< random trees, crossover depth bound, mutations
+  bool normalizeOffspring = false;     ///< pass every offspring through normalizeTree (no X − X:
+                                       ///< surfaces that bound no volume cannot explain points)
 };
 
 /// What one generation reached, for progress reports.

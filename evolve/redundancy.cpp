@@ -5,10 +5,22 @@
 namespace csgvox {
 namespace {
 
+bool sameSubtree(const NodePtr& a, const NodePtr& b) {
+  return a == b || CsgTree(a).structurallyEqual(CsgTree(b));
+}
+
+bool isComplementOf(const NodePtr& a, const NodePtr& b) {
+  return a->kind == NodeKind::Complement && sameSubtree(a->children.front(), b);
+}
+
+// The node with double complements, single-operand operations, repeated
+// operands and operands that cancel (X − X, X ∩ ¬X) removed; nullptr for an
+// empty solid.
 NodePtr normalizeNode(const NodePtr& node) {
   if (node->kind == NodeKind::Primitive) return node;
   if (node->kind == NodeKind::Complement) {
     const NodePtr inner = normalizeNode(node->children.front());
+    if (!inner) return node;  // everything: left as it was
     if (inner->kind == NodeKind::Complement) return inner->children.front();
     if (inner == node->children.front()) return node;
     return std::make_shared<const Node>(NodeKind::Complement, std::vector<NodePtr>{inner});
@@ -16,10 +28,37 @@ NodePtr normalizeNode(const NodePtr& node) {
   std::vector<NodePtr> children;
   children.reserve(node->children.size());
   bool changed = false;
-  for (const NodePtr& c : node->children) {
-    children.push_back(normalizeNode(c));
-    changed = changed || children.back() != c;
+  for (std::size_t k = 0; k < node->children.size(); ++k) {
+    const NodePtr& c = node->children[k];
+    NodePtr n = normalizeNode(c);
+    changed = changed || n != c;
+    if (!n) {
+      // An empty operand empties an intersection and a difference's first
+      // operand; elsewhere it is dropped.
+      if (node->kind == NodeKind::Intersection) return nullptr;
+      if (node->kind == NodeKind::Difference && k == 0) return nullptr;
+      continue;
+    }
+    const bool first = node->kind == NodeKind::Difference && k == 0;
+    bool repeated = false;
+    for (std::size_t j = first ? children.size() : 0; j < children.size() && !repeated; ++j) {
+      if (node->kind == NodeKind::Difference && j == 0) continue;
+      repeated = sameSubtree(children[j], n);
+    }
+    if (repeated) {
+      changed = true;
+      continue;
+    }
+    if (node->kind == NodeKind::Difference && !first && sameSubtree(children.front(), n)) {
+      return nullptr;  // X − X
+    }
+    if (node->kind == NodeKind::Intersection) {
+      for (const NodePtr& other : children)
+        if (isComplementOf(other, n) || isComplementOf(n, other)) return nullptr;
+    }
+    children.push_back(std::move(n));
   }
+  if (children.empty()) return nullptr;
   if (children.size() == 1) return children.front();
   if (!changed) return node;
   return std::make_shared<const Node>(node->kind, std::move(children));
@@ -50,7 +89,8 @@ std::vector<CsgTree> simplerVariants(const CsgTree& tree, const NodePath& path) 
 
 CsgTree normalizeTree(const CsgTree& tree) {
   if (tree.empty()) return tree;
-  return CsgTree(normalizeNode(tree.root()));
+  const NodePtr root = normalizeNode(tree.root());
+  return root ? CsgTree(root) : tree;
 }
 
 CsgTree removeRedundancy(const CsgTree& tree, const FitnessModel& model) {

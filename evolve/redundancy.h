@@ -9,8 +9,13 @@
 
 namespace csgvox {
 
-/// Double complements removed and single-operand operations replaced by their
-/// operand. The solid is unchanged.
+/// Double complements removed, single-operand operations replaced by their
+/// operand, repeated operands of an operation dropped, and subtrees that are
+/// empty because their operands cancel (X − X, X ∩ ¬X) removed from their
+/// parent. The solid is unchanged; the zero set may lose surfaces that bound
+/// no volume (the field of X − X is zero on X's surface), which a fitness at
+/// the points alone would reward. A tree that is empty as a whole is
+/// returned as it was.
 CsgTree normalizeTree(const CsgTree& tree);
 
 /// normalizeTree, then, repeatedly, the first operation node (in depth-first

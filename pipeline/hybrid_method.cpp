@@ -13,6 +13,7 @@
 #include "core/seed.h"
 #include "evolve/point_regions.h"
 #include "evolve/redundancy.h"
+#include "mesh/surface_support.h"
 #include "voxel/description_sets.h"
 
 namespace csgvox {
@@ -58,6 +59,29 @@ std::vector<std::uint32_t> badlyExplained(const PointCloud& scan, const CsgTree&
   for (std::size_t i = 0; i < bad.size(); ++i)
     if (bad[i]) out.push_back(std::uint32_t(i));
   return out;
+}
+
+// Points the tree explains (within `distance` of its zero set) where that
+// zero set bounds no volume: the solid is on both sides of it or on
+// neither, e.g. the surface of X in (A − X) ∪ (A ∩ X), or of X in A − (X − X).
+// A fitness at the points credits such a surface as if it were the part's.
+// The point is projected onto the zero set along the field's gradient and
+// the field read a small step either side.
+std::size_t ghostPoints(const PointCloud& scan, const CsgTree& tree, const SetOperations& ops,
+                        double distance) {
+  const double step = 0.05 * distance;
+  std::vector<char> ghost(scan.size(), 0);
+  tbb::parallel_for(std::size_t{0}, scan.size(), [&](std::size_t i) {
+    const FieldValue v = tree.evaluate(scan.points[i], ops);
+    const double g2 = v.gradient.squaredNorm();
+    if (std::abs(v.f) > distance || g2 <= 0.0) return;
+    const Vec3 q = scan.points[i] - v.f * v.gradient / g2;
+    const Vec3 u = v.gradient / std::sqrt(g2);  // inwards
+    const bool in = tree.evaluate(q + step * u, ops).f >= 0.0;
+    const bool out = tree.evaluate(q - step * u, ops).f < 0.0;
+    ghost[i] = !(in && out);
+  });
+  return std::size_t(std::count(ghost.begin(), ghost.end(), 1));
 }
 
 // A region: its bad points, the box around them, and the union members of
@@ -215,6 +239,22 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
 
 }  // namespace
 
+const char* regionVerdictName(RegionVerdict verdict) {
+  switch (verdict) {
+    case RegionVerdict::NotImproved:
+      return "not improved";
+    case RegionVerdict::NoGain:
+      return "no gain";
+    case RegionVerdict::Ghost:
+      return "ghost surfaces";
+    case RegionVerdict::Unsupported:
+      return "unsupported boundary";
+    case RegionVerdict::Replaced:
+      return "replaced";
+  }
+  return "?";
+}
+
 HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
                         std::span<const Candidate> candidates, const VoxelGrid& grid,
                         const VoxelSet& inside, const HybridOptions& options, double timeLimit) {
@@ -297,16 +337,63 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   const FitnessModel model(scan.points, scan.normals, diagonal, library, options.fitness,
                            options.fitness.voxelWeight > 0.0 ? &target : nullptr);
   out.before = model.evaluate(library.adopt(tree));
-  Fitness best = out.before;
+  // A replacement is judged by the fitness less the credit of the points
+  // explained only by ghost surfaces (a distance and a normal term each),
+  // then by the boundary the scan supports, measured only when a replacement
+  // is about to be accepted (a tree that cannot be sampled supports nothing).
+  const double tolerance = options.fitness.distanceTolerance * diagonal;
+  out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
+  double best = out.before.total - 2.0 * double(out.ghostBefore);
+  std::optional<NearestNeighbors> nearest;
+  SupportOptions so;
+  so.distance = options.supportDistance * tolerance;
+  so.samples = options.supportSamples;
+  so.seed = options.evolve.seed;
+  const auto support = [&](const CsgTree& t) -> std::optional<SurfaceSupport> {
+    if (!nearest) nearest.emplace(scan.points);
+    try {
+      return surfaceSupport(t, *nearest, so);
+    } catch (const std::invalid_argument&) {
+      return std::nullopt;
+    }
+  };
+  std::optional<SurfaceSupport> bestSupport;
+  const double gain = options.minGain * double(scan.size());
   for (std::size_t k = 0; k < found.size(); ++k) {
     HybridRegion& h = found[k].report;
+    h.verdict = RegionVerdict::NotImproved;
     if (h.localAfter > h.localBefore) {
-      const Fitness f = model.evaluate(library.adopt(assemble(std::ptrdiff_t(k))));
-      if (f.total > best.total + options.minGain * double(scan.size())) {
-        best = f;
-        h.replaced = true;
-        accepted[k] = 1;
-        ++out.replaced;
+      const CsgTree trial = assemble(std::ptrdiff_t(k));
+      const Fitness f = model.evaluate(library.adopt(trial));
+      // Ghosts only lower the score: counted once the plain fitness gains.
+      const std::size_t ghosts =
+          f.total > best + gain ? ghostPoints(scan, trial, ops, tolerance) : 0;
+      if (!(f.total > best + gain)) {
+        h.verdict = RegionVerdict::NoGain;
+      } else if (!(f.total - 2.0 * double(ghosts) > best + gain)) {
+        h.verdict = RegionVerdict::Ghost;
+      } else {
+        if (!bestSupport) {
+          bestSupport = support(tree);
+          if (bestSupport) {
+            out.area = bestSupport->area;
+            out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
+          }
+        }
+        const std::optional<SurfaceSupport> s = support(trial);
+        if (bestSupport && s &&
+            s->unsupported <= bestSupport->unsupported + options.supportSlack * bestSupport->area) {
+          best = f.total - 2.0 * double(ghosts);
+          bestSupport = s;
+          out.unsupportedAfter = s->unsupported;
+          out.ghostAfter = ghosts;
+          h.verdict = RegionVerdict::Replaced;
+          h.replaced = true;
+          accepted[k] = 1;
+          ++out.replaced;
+        } else {
+          h.verdict = RegionVerdict::Unsupported;
+        }
       }
     }
     out.regions.push_back(h);

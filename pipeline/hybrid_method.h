@@ -13,9 +13,13 @@
 /// field by default: on clean scans SARDF gives the same fitness at several times the cost).
 /// Regions are independent, so they run in parallel. A refined subtree replaces the original only
 /// when the whole tree's fitness on all points improves (by more than minGain·N, so noise alone
-/// does not swap primitives), so the result is never worse than the voxel tree by that measure;
-/// last, when a subtree was replaced, redundant nodes of the whole tree are removed. When none was,
-/// the result is the input tree itself.
+/// does not swap primitives) once the points it explains only by a zero set that bounds no volume
+/// are no longer credited (the min/max field of (A − X) ∪ (A ∩ X) is zero on X's surface inside A),
+/// and when it adds no boundary where the scan has no points (a fitness at the points cannot see
+/// such surfaces: a slab carved inside a plate, thinner than a voxel); so the result is never
+/// worse than the voxel tree by those measures. Last, when a subtree was replaced,
+/// redundant nodes of the whole tree are removed. When none was, the result is the input tree
+/// itself.
 
 #include <cstddef>
 #include <span>
@@ -32,12 +36,13 @@
 namespace csgvox {
 
 /// The search of a region: population 100, at most 300 generations, 40
-/// without improvement.
+/// without improvement, offspring normalised.
 inline EvolveOptions refineSearchDefaults() {
   EvolveOptions o;
   o.population = 100;
   o.maxGenerations = 300;
   o.stallGenerations = 40;
+  o.normalizeOffspring = true;
   return o;
 }
 
@@ -54,21 +59,41 @@ struct HybridOptions {
   std::size_t maxCandidates = 32;  ///< candidates added to a region's primitives at most
   std::size_t roughPoints = 6000;  ///< a region's generations use at most this many points until
                                    ///< its search stalls
+  double supportDistance = 1.0;  ///< × εd: the tree's boundary farther than this from every point
+                                 ///< is unsupported
+  double supportSlack = 0.01;    ///< a replacement may add unsupported boundary up to this
+                                 ///< fraction of the boundary's area
+  std::size_t supportSamples = 20000;  ///< boundary points sampled to measure the support
 };
+
+/// What became of a region's refined subtree.
+enum class RegionVerdict {
+  NotImproved,  ///< the search found nothing better on the region's points
+  NoGain,       ///< the whole tree's fitness did not rise by minGain·N
+  Ghost,        ///< it rose only through surfaces that bound no volume (the surface of X in
+          ///< (A − X) ∪ (A ∩ X)): once those points' credit is taken away, by too little
+  Unsupported,  ///< it added boundary no scan point is near (a slab carved inside a plate)
+  Replaced,     ///< the refined subtree went into the tree
+};
+
+/// The verdict's name in reports: "not improved", "no gain", "ghost surfaces",
+/// "unsupported boundary", "replaced".
+const char* regionVerdictName(RegionVerdict verdict);
 
 /// What refineTree() did in one region.
 struct HybridRegion {
-  std::size_t badPoints = 0;         ///< badly explained points that formed the region
-  std::size_t points = 0;            ///< points its search was judged on
-  std::size_t members = 0;           ///< union members of the tree in its subtree
-  std::size_t library = 0;           ///< primitives its search combined
-  std::size_t generations = 0;       ///< generations of its search
-  double localBefore = 0.0;          ///< the subtree's fitness on the region's points
-  double localAfter = 0.0;           ///< the search's best tree's
-  bool replaced = false;             ///< the refined subtree went into the tree
-  std::size_t primitivesBefore = 0;  ///< primitives of the subtree
-  std::size_t primitivesAfter = 0;   ///< primitives of the refined subtree
-  double seconds = 0.0;              ///< wall time of its search
+  std::size_t badPoints = 0;    ///< badly explained points that formed the region
+  std::size_t points = 0;       ///< points its search was judged on
+  std::size_t members = 0;      ///< union members of the tree in its subtree
+  std::size_t library = 0;      ///< primitives its search combined
+  std::size_t generations = 0;  ///< generations of its search
+  double localBefore = 0.0;     ///< the subtree's fitness on the region's points
+  double localAfter = 0.0;      ///< the search's best tree's
+  bool replaced = false;        ///< the refined subtree went into the tree
+  RegionVerdict verdict = RegionVerdict::NotImproved;  ///< why it went in or not
+  std::size_t primitivesBefore = 0;                    ///< primitives of the subtree
+  std::size_t primitivesAfter = 0;                     ///< primitives of the refined subtree
+  double seconds = 0.0;                                ///< wall time of its search
 };
 
 /// Result of refineTree().
@@ -80,7 +105,12 @@ struct HybridResult {
   Fitness after;                      ///< the result's
   std::size_t primitivesBefore = 0;
   std::size_t primitivesAfter = 0;
-  std::size_t replaced = 0;  ///< regions whose subtree was replaced
+  std::size_t replaced = 0;        ///< regions whose subtree was replaced
+  std::size_t ghostBefore = 0;     ///< points the input tree explains only by a ghost surface
+  std::size_t ghostAfter = 0;      ///< the result's
+  double area = 0.0;               ///< the input tree's boundary area (scan units²)
+  double unsupportedBefore = 0.0;  ///< its boundary area no scan point is near
+  double unsupportedAfter = 0.0;   ///< the result's
 };
 
 /// Refines a tree on an oriented scan. `candidates` are the bounded

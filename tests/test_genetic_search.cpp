@@ -177,5 +177,35 @@ TEST(Redundancy, RemovesWhatDoesNotChangeTheFitness) {
   EXPECT_TRUE(removeRedundancy(cube, model).structurallyEqual(cube));
 }
 
+// Operands that cancel or repeat go, and with them the surfaces that bound
+// no volume: the zero set of X − X is X's surface, which a fitness at the
+// points would reward.
+TEST(Redundancy, NormalizingDropsCancellingAndRepeatedOperands) {
+  const CsgTree a = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(2, 2, 2)}, "a");
+  const CsgTree b = CsgTree::leaf(Box{Vec3(0, 0, 2), Mat3::Identity(), Vec3(1, 1, 1)}, "b");
+  const CsgTree c = CsgTree::leaf(Sphere{Vec3(1, 1, 1), 0.5}, "c");
+  const CsgTree bCopy = CsgTree::leaf(Box{Vec3(0, 0, 2), Mat3::Identity(), Vec3(1, 1, 1)});
+  EXPECT_TRUE(
+      normalizeTree(CsgTree::subtract({a, CsgTree::subtract({b, bCopy})})).structurallyEqual(a));
+  EXPECT_TRUE(normalizeTree(CsgTree::unite({a, CsgTree::subtract({b, b})})).structurallyEqual(a));
+  EXPECT_TRUE(normalizeTree(CsgTree::unite({a, CsgTree::intersect({b, CsgTree::complement(b)})}))
+                  .structurallyEqual(a));
+  EXPECT_TRUE(
+      normalizeTree(CsgTree::unite({a, b, bCopy})).structurallyEqual(CsgTree::unite({a, b})));
+  EXPECT_TRUE(normalizeTree(CsgTree::intersect({a, a})).structurallyEqual(a));
+  EXPECT_TRUE(normalizeTree(CsgTree::subtract({a, b, c, bCopy}))
+                  .structurallyEqual(CsgTree::subtract({a, b, c})));
+  // An empty operand empties an intersection and a difference it is cut from.
+  EXPECT_TRUE(normalizeTree(CsgTree::unite({c, CsgTree::intersect({a, CsgTree::subtract({b, b})})}))
+                  .structurallyEqual(c));
+  EXPECT_TRUE(normalizeTree(CsgTree::unite({c, CsgTree::subtract({CsgTree::subtract({a, a}), b})}))
+                  .structurallyEqual(c));
+  // Different operands are kept, in order; a tree empty as a whole is left.
+  const CsgTree kept = CsgTree::subtract({a, b, c});
+  EXPECT_TRUE(normalizeTree(kept).structurallyEqual(kept));
+  const CsgTree empty = CsgTree::subtract({a, a});
+  EXPECT_TRUE(normalizeTree(empty).structurallyEqual(empty));
+}
+
 }  // namespace
 }  // namespace csgvox

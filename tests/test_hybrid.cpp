@@ -12,6 +12,7 @@
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "mesh/surface_sampler.h"
+#include "mesh/surface_support.h"
 #include "pipeline/hybrid_method.h"
 #include "pipeline/reconstruct.h"
 #include "voxel/description_sets.h"
@@ -82,6 +83,68 @@ TEST(Hybrid, CutsASlotNarrowerThanAVoxel) {
   EXPECT_GT(volumetricIou(r.tree, c.truth, 400), 0.999);
   // The slot is half a percent of the plate's volume.
   EXPECT_LT(volumetricIou(c.voxelTree, c.truth, 400), 0.997);
+}
+
+// A plate with a horizontal slot cut in from one side, thinner than a
+// voxel. A slab through the whole plate at the slot's height explains the
+// points on the slot's faces as well as the slot does, and raises the
+// fitness at the points; but it adds two faces across the plate where the
+// scan has no point. The refinement refuses it, and takes the slot when it
+// is a candidate.
+TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
+  const Box plate{Vec3::Zero(), Mat3::Identity(), Vec3(20, 12, 3)};
+  const Box slot{Vec3(15, 0, 0), Mat3::Identity(), Vec3(6, 4, 0.25)};
+  const Box slab{Vec3::Zero(), Mat3::Identity(), Vec3(21, 13, 0.25)};
+  const CsgTree truth =
+      CsgTree::subtract({CsgTree::leaf(plate, "plate"), CsgTree::leaf(slot, "slot")});
+  const CsgTree voxelTree = CsgTree::leaf(plate, "plate");
+  SampleOptions so;
+  so.points = 30000;
+  const PointCloud scan = sampleSurface(truth, so).cloud;
+  const VoxelGrid grid =
+      VoxelGrid::around(OrientedBox{Vec3::Zero(), Mat3::Identity(), Vec3(20, 12, 3)});
+  ASSERT_LT(0.5, grid.voxelSize());
+  const VoxelSet inside = solidVoxels(voxelTree, grid);
+  const auto candidate = [](const Box& box, const char* name) {
+    Candidate c;
+    c.tree = CsgTree::leaf(box, name);
+    return c;
+  };
+
+  const std::vector<Candidate> slabOnly = {candidate(plate, "plate"), candidate(slab, "slab")};
+  const HybridResult refused = refineTree(scan, voxelTree, slabOnly, grid, inside);
+  ASSERT_EQ(refused.regions.size(), 1u);
+  EXPECT_NE(refused.regions[0].verdict, RegionVerdict::Replaced);
+  EXPECT_FALSE(refused.regions[0].replaced);
+  EXPECT_EQ(refused.replaced, 0u);
+  EXPECT_TRUE(refused.tree.structurallyEqual(voxelTree)) << treeNodeJson(refused.tree);
+  EXPECT_EQ(refused.ghostAfter, refused.ghostBefore);
+  // The slab's faces: what the scan does not support. The plate's boundary
+  // is all supported but the slot's mouth, the true part's all of it.
+  const NearestNeighbors nearest(scan.points);
+  SupportOptions support;
+  support.distance = 0.01 * scan.diagonal();
+  const SurfaceSupport slabbed =
+      surfaceSupport(CsgTree::subtract({voxelTree, CsgTree::leaf(slab)}), nearest, support);
+  // Both faces but the slot's (2·40·24 − 2·11·8), less a band of εd along
+  // the plate's sides and the slot's edges, where points are near.
+  EXPECT_GT(slabbed.unsupported, 1500.0);
+  EXPECT_LT(slabbed.unsupported, 2 * 40 * 24 - 2 * 11 * 8);
+  const SurfaceSupport plain = surfaceSupport(voxelTree, nearest, support);
+  EXPECT_NEAR(plain.area, 2 * (40 * 24 + 40 * 6 + 24 * 6), 60.0);
+  EXPECT_LT(plain.unsupported, 0.01 * plain.area);
+  EXPECT_LT(surfaceSupport(truth, nearest, support).unsupported, 0.002 * plain.area);
+
+  // Offered the slot too, the refinement never takes a tree that explains
+  // the slot's faces by a ghost surface (the surface of a subtree carved
+  // and put back), and never ends below the voxel tree's IoU.
+  const std::vector<Candidate> both = {candidate(plate, "plate"), candidate(slab, "slab"),
+                                       candidate(slot, "slot")};
+  const HybridResult cut = refineTree(scan, voxelTree, both, grid, inside);
+  EXPECT_EQ(cut.ghostAfter, cut.ghostBefore);
+  EXPECT_GE(volumetricIou(cut.tree, truth, 400), volumetricIou(voxelTree, truth, 400) - 1e-9)
+      << treeNodeJson(cut.tree);
+  EXPECT_LE(cut.unsupportedAfter, cut.unsupportedBefore + 0.01 * cut.area);
 }
 
 TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
