@@ -217,7 +217,10 @@ TEST_F(Cli, HybridIsTheDefaultAndReportsItsRefinement) {
   EXPECT_EQ(r["primitives_after"], h["tree"]["primitives"]);
   EXPECT_LE(h["tree"]["primitives"].get<int>(), v["tree"]["primitives"].get<int>());
   std::size_t replaced = 0;
-  for (const auto& region : r["regions"]) replaced += region["replaced"].get<bool>();
+  for (const auto& region : r["regions"]) {
+    replaced += region["replaced"].get<bool>();
+    EXPECT_EQ(region["replaced"].get<bool>(), region["verdict"] == "replaced");
+  }
   EXPECT_EQ(r["subtrees_replaced"].get<std::size_t>(), replaced);
 }
 
