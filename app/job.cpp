@@ -299,6 +299,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                            {"primitives_after", r.primitivesAfter},
                            {"replaced", r.replaced},
                            {"verdict", regionVerdictName(r.verdict)},
+                           {"unsupported_area", r.unsupported},
                            {"seconds", r.seconds}});
       }
       report["refinement"] = {{"bad_points", h.badPoints},

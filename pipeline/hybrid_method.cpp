@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -339,8 +340,9 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   out.before = model.evaluate(library.adopt(tree));
   // A replacement is judged by the fitness less the credit of the points
   // explained only by ghost surfaces (a distance and a normal term each),
-  // then by the boundary the scan supports, measured only when a replacement
-  // is about to be accepted (a tree that cannot be sampled supports nothing).
+  // then less the credit of the points the boundary it adds where the scan
+  // has none would hold; the support is measured only when a replacement is
+  // about to be accepted (a tree that cannot be sampled supports nothing).
   const double tolerance = options.fitness.distanceTolerance * diagonal;
   out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
   double best = out.before.total - 2.0 * double(out.ghostBefore);
@@ -381,10 +383,17 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
           }
         }
         const std::optional<SurfaceSupport> s = support(trial);
-        if (bestSupport && s &&
-            s->unsupported <= bestSupport->unsupported + options.supportSlack * bestSupport->area) {
+        if (s) h.unsupported = s->unsupported;
+        // Boundary the scan does not support counts as the points it would
+        // hold at the scan's density, each losing its distance and normal
+        // credit.
+        const double density = bestSupport ? double(scan.size()) / bestSupport->area : 0.0;
+        const double score = s ? f.total - 2.0 * double(ghosts) -
+                                     2.0 * density * (s->unsupported - bestSupport->unsupported)
+                               : -std::numeric_limits<double>::infinity();
+        if (bestSupport && s && score > best + gain) {
           best = f.total - 2.0 * double(ghosts);
-          bestSupport = s;
+          bestSupport = SurfaceSupport{bestSupport->area, s->unsupported};
           out.unsupportedAfter = s->unsupported;
           out.ghostAfter = ghosts;
           h.verdict = RegionVerdict::Replaced;

@@ -15,11 +15,11 @@
 /// when the whole tree's fitness on all points improves (by more than minGain·N, so noise alone
 /// does not swap primitives) once the points it explains only by a zero set that bounds no volume
 /// are no longer credited (the min/max field of (A − X) ∪ (A ∩ X) is zero on X's surface inside A),
-/// and when it adds no boundary where the scan has no points (a fitness at the points cannot see
-/// such surfaces: a slab carved inside a plate, thinner than a voxel); so the result is never
-/// worse than the voxel tree by those measures. Last, when a subtree was replaced,
-/// redundant nodes of the whole tree are removed. When none was, the result is the input tree
-/// itself.
+/// and of the points the boundary it adds where the scan has no points would hold at the scan's
+/// density (a fitness at the points cannot see such surfaces: a slab carved inside a plate,
+/// thinner than a voxel); so the result is never worse than the voxel tree by that measure. Last,
+/// when a subtree was replaced, redundant nodes of the whole tree are removed. When none was, the
+/// result is the input tree itself.
 
 #include <cstddef>
 #include <span>
@@ -61,8 +61,6 @@ struct HybridOptions {
                                    ///< its search stalls
   double supportDistance = 1.0;  ///< × εd: the tree's boundary farther than this from every point
                                  ///< is unsupported
-  double supportSlack = 0.01;    ///< a replacement may add unsupported boundary up to this
-                                 ///< fraction of the boundary's area
   std::size_t supportSamples = 20000;  ///< boundary points sampled to measure the support
 };
 
@@ -72,7 +70,8 @@ enum class RegionVerdict {
   NoGain,       ///< the whole tree's fitness did not rise by minGain·N
   Ghost,        ///< it rose only through surfaces that bound no volume (the surface of X in
           ///< (A − X) ∪ (A ∩ X)): once those points' credit is taken away, by too little
-  Unsupported,  ///< it added boundary no scan point is near (a slab carved inside a plate)
+  Unsupported,  ///< it added boundary no scan point is near (a slab carved inside a plate): once
+                ///< the credit of the points that area would hold is taken away, by too little
   Replaced,     ///< the refined subtree went into the tree
 };
 
@@ -91,9 +90,10 @@ struct HybridRegion {
   double localAfter = 0.0;      ///< the search's best tree's
   bool replaced = false;        ///< the refined subtree went into the tree
   RegionVerdict verdict = RegionVerdict::NotImproved;  ///< why it went in or not
-  std::size_t primitivesBefore = 0;                    ///< primitives of the subtree
-  std::size_t primitivesAfter = 0;                     ///< primitives of the refined subtree
-  double seconds = 0.0;                                ///< wall time of its search
+  double unsupported = -1.0;  ///< the tree with it: boundary no point is near (< 0: not weighed)
+  std::size_t primitivesBefore = 0;  ///< primitives of the subtree
+  std::size_t primitivesAfter = 0;   ///< primitives of the refined subtree
+  double seconds = 0.0;              ///< wall time of its search
 };
 
 /// Result of refineTree().

@@ -144,7 +144,6 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
   EXPECT_EQ(cut.ghostAfter, cut.ghostBefore);
   EXPECT_GE(volumetricIou(cut.tree, truth, 400), volumetricIou(voxelTree, truth, 400) - 1e-9)
       << treeNodeJson(cut.tree);
-  EXPECT_LE(cut.unsupportedAfter, cut.unsupportedBefore + 0.01 * cut.area);
 }
 
 TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
