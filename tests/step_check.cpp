@@ -39,10 +39,10 @@ int main(int argc, char** argv) {
       const double error = s.volume / sampled - 1.0;
       const bool ok = s.solids == 1 && s.valid && s.closed && std::abs(error) <= 0.005;
       allOk = allOk && ok;
-      std::printf("%s: %zu solid(s), %s, %s, %zu faces, volume %.6g vs sampled %.6g (%+.3f %%) %s\n",
-                  f.c_str(), s.solids, s.valid ? "valid" : "INVALID",
-                  s.closed ? "closed" : "OPEN", s.faces, s.volume, sampled, 100 * error,
-                  ok ? "OK" : "FAIL");
+      std::printf(
+          "%s: %zu solid(s), %s, %s, %zu faces, volume %.6g vs sampled %.6g (%+.3f %%) %s\n",
+          f.c_str(), s.solids, s.valid ? "valid" : "INVALID", s.closed ? "closed" : "OPEN", s.faces,
+          s.volume, sampled, 100 * error, ok ? "OK" : "FAIL");
     }
     return allOk ? 0 : 1;
   } catch (const std::exception& e) {
