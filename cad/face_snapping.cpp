@@ -253,7 +253,6 @@ FaceSnapResult snapFaces(const CsgTree& tree, const FaceSnapOptions& options) {
 
   // New slabs; a primitive whose slab would shrink below half keeps it.
   std::vector<std::vector<Slab>> moved = leafSlabs;
-  std::vector<std::vector<double>> moves(leaves.size());
   for (const Cap& c : caps) {
     if (c.slot < 0) continue;  // a torus's plane
     Slab& s = moved[c.leaf][std::size_t(c.slot / 2)];
@@ -265,6 +264,7 @@ FaceSnapResult snapFaces(const CsgTree& tree, const FaceSnapOptions& options) {
     }
   }
   for (std::size_t i = 0; i < leaves.size(); ++i) {
+    bool changed = false;
     for (std::size_t k = 0; k < moved[i].size(); ++k) {
       const Slab& before = leafSlabs[i][k];
       Slab& after = moved[i][k];
@@ -275,12 +275,13 @@ FaceSnapResult snapFaces(const CsgTree& tree, const FaceSnapOptions& options) {
       const bool halfSpace = primitives[i].type() == PrimitiveType::HalfSpace;
       for (const double d : {halfSpace ? 0.0 : after.low - before.low, after.high - before.high}) {
         if (d != 0.0) {
+          changed = true;
           ++result.movedCaps;
           result.largestMove = std::max(result.largestMove, std::abs(d));
         }
       }
     }
-    if (!moved[i].empty()) primitives[i] = withSlabs(primitives[i], moved[i]);
+    if (changed) primitives[i] = withSlabs(primitives[i], moved[i]);
   }
 
   // The same tree over the new primitives, sharing what it shared.
