@@ -34,6 +34,7 @@
 #include <random>
 #include <sstream>
 
+#include "cad/face_snapping.h"
 #include "core/export_extent.h"
 #include "core/solid_sampling.h"
 #include "io/tree_names.h"
@@ -286,85 +287,166 @@ BrepSummary summarize(const TopoDS_Shape& shape) {
   return s;
 }
 
+namespace {
+
+// A built solid with its faces of one surface merged: one solid, or a
+// compound of several.
+struct Candidate {
+  TopoDS_Shape shape;
+  std::size_t solids = 0;
+  double volume = 0.0;
+  bool valid = false;
+};
+
+Candidate candidate(const TopoDS_Shape& built, bool unifyFaces) {
+  TopoDS_Shape shape = built;
+  if (unifyFaces) {
+    // Merging is cosmetic: when OpenCASCADE cannot do it, or its result is
+    // not valid, the pieces stay as the booleans left them.
+    try {
+      ShapeUpgrade_UnifySameDomain unify(shape, true, true, false);
+      unify.Build();
+      const TopoDS_Shape merged = unify.Shape();
+      if (Builder::hasSolid(merged) && BRepCheck_Analyzer(merged).IsValid()) shape = merged;
+    } catch (const Standard_Failure&) {
+    }
+  }
+  // Keep the solids alone (a boolean's result is a compound).
+  std::vector<TopoDS_Shape> solids;
+  for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) solids.push_back(e.Current());
+  Candidate c;
+  c.solids = solids.size();
+  if (solids.size() == 1) {
+    c.shape = solids.front();
+  } else {
+    TopoDS_Compound compound;
+    BRep_Builder builder;
+    builder.MakeCompound(compound);
+    for (const TopoDS_Shape& s : solids) builder.Add(compound, s);
+    c.shape = compound;
+  }
+  c.volume = shapeVolume(c.shape);
+  c.valid = c.solids > 0 && BRepCheck_Analyzer(c.shape).IsValid();
+  return c;
+}
+
+}  // namespace
+
 BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   tree.validate();
   const Aabb extent = exportExtent(tree);
-  const auto names = leafNames(tree);
-  const Builder b{options, names, extent,
-                  options.halfSpaceScale * std::max(extent.diagonal(), 1e-9)};
-  NodePath path;
-  std::optional<TopoDS_Shape> shape = b.node(*tree.root(), path);
-  if (!shape) throw CadError("the solid is empty: no point lies inside the tree");
+  const double edge = options.halfSpaceScale * std::max(extent.diagonal(), 1e-9);
+  const Aabb box = extent.grown(0.01 * extent.diagonal());
+  const double sampled = options.volumeTolerance > 0.0 ? sampledVolume(tree, box, 48) : 0.0;
   // OpenCASCADE's booleans can return a valid but wrong solid on nearly
-  // coincident or tangent faces: compare volumes with the tree's, and on a
-  // mismatch name the first operation (children before parents) whose
-  // solid disagrees.
-  if (options.volumeTolerance > 0.0) {
-    const Aabb box = extent.grown(0.01 * extent.diagonal());
-    const double sampled = sampledVolume(tree, box, 48);
-    const double brep = shapeVolume(*shape);
-    if (!volumesAgree(brep, sampled, box, options.volumeTolerance)) {
-      std::string where = b.nodeText(*tree.root(), NodePath{});
-      std::function<bool(const Node&, NodePath&)> locate = [&](const Node& n, NodePath& p) {
-        if (n.kind == NodeKind::Primitive) return false;
-        for (std::size_t i = 0; i < n.children.size(); ++i) {
-          p.push_back(i);
-          const bool found = locate(*n.children[i], p);
-          p.pop_back();
-          if (found) return true;
-        }
-        const CsgTree sub(tree.nodeAt(p));
-        NodePath local;
-        const auto s = b.node(n, local);
-        const Aabb subBox = exportExtent(sub).grown(0.01 * extent.diagonal());
-        const double v = sampledVolume(sub, subBox, 48);
-        if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance))
-          return false;
-        where = b.nodeText(n, p);
-        return true;
-      };
-      NodePath p;
-      locate(*tree.root(), p);
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), " (the part comes out with volume %.6g instead of %.6g)",
-                    brep, sampled);
-      throw CadError("OpenCASCADE computed a wrong solid for " + where + buf);
-    }
-  }
+  // coincident or tangent faces: its volume must be the tree's.
+  auto agrees = [&](const Candidate& c) {
+    return options.volumeTolerance <= 0.0 ||
+           volumesAgree(c.volume, sampled, box, options.volumeTolerance);
+  };
+  auto good = [&](const Candidate& c) { return c.valid && c.solids == 1 && agrees(c); };
 
-  BrepResult result;
-  try {
-    if (options.unifyFaces) {
-      // Merging is cosmetic: when OpenCASCADE cannot do it, or its result is
-      // not valid, the pieces stay as the booleans left them.
-      try {
-        ShapeUpgrade_UnifySameDomain unify(*shape, true, true, false);
-        unify.Build();
-        const TopoDS_Shape merged = unify.Shape();
-        if (Builder::hasSolid(merged) && BRepCheck_Analyzer(merged).IsValid()) shape = merged;
-      } catch (const Standard_Failure&) {
+  struct Built {
+    CsgTree tree;
+    Candidate solid;
+  };
+  std::vector<Built> tries;
+  std::optional<CadError> firstError;
+  auto attempt = [&](const CsgTree& t, double fuzzy) {
+    const auto names = leafNames(t);
+    StepOptions o = options;
+    o.fuzzy = fuzzy;
+    const Builder b{o, names, extent, edge};
+    try {
+      NodePath path;
+      const std::optional<TopoDS_Shape> shape = b.node(*t.root(), path);
+      if (!shape) throw CadError("the solid is empty: no point lies inside the tree");
+      tries.push_back({t, candidate(*shape, options.unifyFaces)});
+    } catch (const CadError& e) {
+      if (!firstError) firstError = e;
+    } catch (const Standard_Failure& e) {
+      if (!firstError) {
+        firstError =
+            CadError(std::string("OpenCASCADE cannot finish the solid: ") + e.GetMessageString());
       }
     }
-    // Keep the solids alone (a boolean's result is a compound).
-    std::vector<TopoDS_Shape> solids;
-    for (TopExp_Explorer e(*shape, TopAbs_SOLID); e.More(); e.Next()) solids.push_back(e.Current());
-    if (solids.size() == 1) {
-      result.shape = solids.front();
-    } else {
-      TopoDS_Compound compound;
-      BRep_Builder builder;
-      builder.MakeCompound(compound);
-      for (const TopoDS_Shape& s : solids) builder.Add(compound, s);
-      result.shape = compound;
+  };
+  auto done = [&] { return !tries.empty() && good(tries.back().solid); };
+  auto attemptSnapped = [&](bool torusTangents) {
+    FaceSnapOptions snap;
+    snap.tolerance = options.snapTolerance * extent.diagonal();
+    snap.angle = options.snapAngle;
+    snap.torusTangents = torusTangents;
+    const FaceSnapResult snapped = snapFaces(tree, snap);
+    if (snapped.movedCaps > 0 || snapped.turnedAxes > 0) attempt(snapped.tree, options.fuzzy);
+  };
+  // The tree as it is; then, until one is a valid solid of the tree's
+  // volume: its near-coincident caps snapped (pieces that a sliver of the
+  // fit separates come together); the tree as it is with fuzzy booleans
+  // (OpenCASCADE then classifies faces that nearly touch a torus right);
+  // the caps snapped onto the planes tangent to the tori as well (where
+  // they lie decides OpenCASCADE's result there).
+  attempt(tree, options.fuzzy);
+  if (!done() && options.snapTolerance > 0.0) attemptSnapped(false);
+  if (!done() && options.retryFuzzy > options.fuzzy) attempt(tree, options.retryFuzzy);
+  if (!done() && options.snapTolerance > 0.0) attemptSnapped(true);
+  // The first one solid of the right volume, else the first of several
+  // solids of the right volume (written as they are: a sliver wider than
+  // the snapping tolerance separates them in the tree itself).
+  const Built* chosen = nullptr;
+  for (const Built& t : tries) {
+    if (good(t.solid)) {
+      chosen = &t;
+      break;
     }
-    if (!BRepCheck_Analyzer(result.shape).IsValid()) {
+  }
+  for (std::size_t i = 0; !chosen && i < tries.size(); ++i) {
+    if (tries[i].solid.valid && agrees(tries[i].solid)) chosen = &tries[i];
+  }
+  if (!chosen) {
+    if (tries.empty()) throw *firstError;
+    const auto names = leafNames(tree);
+    const Builder b{options, names, extent, edge};
+    if (agrees(tries.front().solid)) {
       throw CadError("OpenCASCADE built an invalid solid for " +
                      b.nodeText(*tree.root(), NodePath{}));
     }
+    // Name the first operation (children before parents) whose solid
+    // disagrees with the tree's.
+    std::string where = b.nodeText(*tree.root(), NodePath{});
+    std::function<bool(const Node&, NodePath&)> locate = [&](const Node& n, NodePath& p) {
+      if (n.kind == NodeKind::Primitive) return false;
+      for (std::size_t i = 0; i < n.children.size(); ++i) {
+        p.push_back(i);
+        const bool found = locate(*n.children[i], p);
+        p.pop_back();
+        if (found) return true;
+      }
+      const CsgTree sub(tree.nodeAt(p));
+      NodePath local;
+      const auto s = b.node(n, local);
+      const Aabb subBox = exportExtent(sub).grown(0.01 * extent.diagonal());
+      const double v = sampledVolume(sub, subBox, 48);
+      if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance)) return false;
+      where = b.nodeText(n, p);
+      return true;
+    };
+    NodePath p;
+    locate(*tree.root(), p);
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), " (the part comes out with volume %.6g instead of %.6g)",
+                  tries.front().solid.volume, sampled);
+    throw CadError("OpenCASCADE computed a wrong solid for " + where + buf);
+  }
+
+  BrepResult result;
+  result.shape = chosen->solid.shape;
+  try {
     if (options.nameFaces) {
+      const auto names = leafNames(chosen->tree);
       const double diagonal = extent.diagonal();
       BRepMesh_IncrementalMesh mesh(result.shape, 0.01 * diagonal, false, 0.5, false);
-      const std::vector<const Node*> leaves = tree.leaves();
+      const std::vector<const Node*> leaves = chosen->tree.leaves();
       for (TopExp_Explorer e(result.shape, TopAbs_FACE); e.More(); e.Next()) {
         const Node* leaf = faceLeaf(TopoDS::Face(e.Current()), leaves, 1e-6 * diagonal);
         if (leaf) result.faceNames.emplace_back(e.Current(), names.at(leaf));

@@ -24,8 +24,14 @@ struct StepOptions {
   bool nameFaces = true;        ///< name each face after the primitive it lies on
   double fuzzy =
       0.0;  ///< boolean tolerance (OpenCASCADE's fuzzy value), fraction of the part's diagonal
-  double volumeTolerance = 0.01;  ///< refuse a solid whose volume differs more from the tree's
-                                  ///< (sampled), fraction; 0: no check
+  double snapTolerance = 0.00125;  ///< when the tree as it is does not give one solid of its
+                                   ///< volume, caps this close are snapped (snapFaces), fraction
+                                   ///< of the diagonal (a quarter of the inlier distance); 0: never
+  double snapAngle = 1e-6;         ///< directions this close are snapped with them, radians
+  double retryFuzzy = 1e-4;        ///< fuzzy value of the retry with fuzzy booleans, fraction of
+                                   ///< the diagonal; 0: no such retry
+  double volumeTolerance = 0.01;   ///< refuse a solid whose volume differs more from the tree's
+                                   ///< (sampled), fraction; 0: no check
   std::string productName = "csgvox part";  ///< name of the solid's product in the file
 };
 
@@ -52,6 +58,13 @@ bool stepExportAvailable();
 
 /// Builds the tree's B-rep and writes it as STEP AP214 (replacing `path`
 /// only once the file is complete). Returns the written solid's summary.
+/// When the tree as it is does not come out as one valid solid of the
+/// tree's volume, it is built again with its near-coincident caps snapped
+/// (snapFaces(), options.snapTolerance), then with fuzzy booleans
+/// (options.retryFuzzy), then with the caps also snapped to the planes
+/// tangent to its tori; the first that is one valid solid of the tree's
+/// volume is written (else the first valid one of the tree's volume, in
+/// several solids).
 /// @throw std::invalid_argument for an empty tree or one without a bounded
 ///        primitive; CadError naming the node whose boolean operation
 ///        failed or gave a solid whose volume is not the tree's, or when the
