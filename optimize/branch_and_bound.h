@@ -42,10 +42,8 @@ class SelectionObjective {
 
 /// One item of a SelectionProblem.
 struct SelectionItem {
-  std::uint32_t id = 0;              ///< the caller's index of the item
-  VoxelSet set;                      ///< voxels the item adds to the union
-  std::array<VoxelSet, 2> parts;     ///< set ∩ channel k (empty beyond the channel count)
-  std::vector<std::uint32_t> words;  ///< indices of the non-zero 64-bit words of `set`
+  std::uint32_t id = 0;  ///< the caller's index of the item
+  VoxelSet set;          ///< voxels the item adds to the union
 };
 
 /// Items over a universe of voxels, and the channels the energy counts in.
