@@ -16,8 +16,9 @@ namespace {
 // Depth-first over the items in order: at item t, include it (when it adds
 // voxels of the bound channel) or not. A node is cut when the objective's
 // bound, over everything the remaining items could add, cannot beat the best
-// energy found. The union is kept as a cover count per class, so a node costs
-// the classes of its item, not the universe.
+// energy found. The union is kept as a bitset over the classes, so a node
+// costs a pass over a few dozen words and the classes its item newly covers,
+// whatever the number of voxels.
 class BranchAndBound {
  public:
   BranchAndBound(const SelectionProblem& pb, const SelectionClasses& classes,
@@ -28,7 +29,15 @@ class BranchAndBound {
         boundChannel_(pb.boundChannel()),
         budget_(options.nodeBudget),
         deadline_(options.deadline),
-        cover_(classes.size(), 0) {
+        classWords_((classes.size() + 63) / 64),
+        united_(classWords_, 0),
+        itemBits_(n_ * classWords_, 0),
+        newly_(n_ * classWords_, 0) {
+    for (std::size_t t = 0; t < n_; ++t) {
+      for (std::uint32_t c : classes.classesOf(t)) {
+        itemBits_[t * classWords_ + c / 64] |= std::uint64_t(1) << (c % 64);
+      }
+    }
     // A class is in the suffix of items t.. while t is at most its last item:
     // ending_[t] lists the classes (of the bound channel) whose last item is t.
     std::vector<std::size_t> perItem(n_ + 1, 0);
@@ -88,17 +97,22 @@ class BranchAndBound {
     if (objective_.bound(chosen, counts_, reach) >= bestEnergy_ - 1e-12) return;
     // Include t when it adds a voxel of the bound channel.
     const ChannelCounts before = counts_;
-    for (std::uint32_t c : classes_.classesOf(t)) {
-      if (cover_[c]++ == 0) {
-        for (std::size_t k = 0; k < counts_.size(); ++k) counts_[k] += classes_.weight(c)[k];
+    std::uint64_t* newly = newly_.data() + t * classWords_;
+    const std::uint64_t* item = itemBits_.data() + t * classWords_;
+    for (std::size_t w = 0; w < classWords_; ++w) {
+      newly[w] = item[w] & ~united_[w];
+      for (std::uint64_t bits = newly[w]; bits; bits &= bits - 1) {
+        const ChannelCounts& weight = classes_.weight(w * 64 + std::size_t(std::countr_zero(bits)));
+        for (std::size_t k = 0; k < counts_.size(); ++k) counts_[k] += weight[k];
       }
+      united_[w] |= newly[w];
     }
     if (counts_[boundChannel_] > before[boundChannel_]) {
       current[t] = 1;
       search(t + 1, chosen + 1, coveredOut + endingCovered(t), current);
       current[t] = 0;
     }
-    for (std::uint32_t c : classes_.classesOf(t)) --cover_[c];
+    for (std::size_t w = 0; w < classWords_; ++w) united_[w] &= ~newly[w];
     counts_ = before;
     search(t + 1, chosen, coveredOut + endingCovered(t), current);
   }
@@ -107,7 +121,8 @@ class BranchAndBound {
   std::size_t endingCovered(std::size_t t) const {
     std::size_t n = 0;
     for (std::size_t e = endingStart_[t]; e < endingStart_[t + 1]; ++e) {
-      if (cover_[ending_[e]]) n += boundWeight(ending_[e]);
+      const std::uint32_t c = ending_[e];
+      if (united_[c / 64] >> (c % 64) & 1) n += boundWeight(c);
     }
     return n;
   }
@@ -119,7 +134,10 @@ class BranchAndBound {
   std::uint64_t budget_;
   std::chrono::steady_clock::time_point deadline_;
   std::uint64_t nodes_ = 0;
-  std::vector<std::uint32_t> cover_;      // items of the current selection holding each class
+  std::size_t classWords_;                // 64-bit words of a bitset over the classes
+  std::vector<std::uint64_t> united_;     // classes the current selection holds
+  std::vector<std::uint64_t> itemBits_;   // item t's classes: words [t, t + 1) * classWords_
+  std::vector<std::uint64_t> newly_;      // at depth t, the classes item t added
   ChannelCounts counts_{};                // the current union's voxels per channel
   std::vector<std::size_t> suffix_;       // bound-channel voxels items t.. can reach
   std::vector<std::size_t> endingStart_;  // ending_ of item t: [endingStart_[t], endingStart_[t+1])

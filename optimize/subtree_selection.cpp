@@ -66,11 +66,10 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
   SubtreeResult result;
   result.actionCount = 2 * neighbours.size();
   // Work on the root's own voxels only.
-  const std::vector<std::uint32_t> positions = root.members();
-  VoxelSet localInside = inside.gather(positions);
+  VoxelSet localInside = inside.compress(root);
   VoxelSet localOutside = localInside.complemented();
   const std::size_t insideCount = localInside.count();
-  const std::size_t outsideCount = positions.size() - insideCount;
+  const std::size_t outsideCount = localInside.size() - insideCount;
   double invL = 0.0;
   if (options.minFeatureVoxels > 0.0) {
     invL = options.minFeatureVoxels / double(std::max<std::size_t>(1, insideCount));
@@ -83,7 +82,7 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
   // same effect are kept once. An item's id is 2i (+1 for subtract).
   std::vector<double> score;
   for (std::size_t i = 0; i < neighbours.size() && outsideCount > 0; ++i) {
-    const VoxelSet local = neighbours[i]->gather(positions);
+    const VoxelSet local = neighbours[i]->compress(root);
     for (int sub = 0; sub < 2; ++sub) {
       VoxelSet removes = sub ? local : local.complemented();
       const std::size_t removesOut = VoxelSet::countAnd(removes, pb.channel(1));

@@ -64,11 +64,10 @@ UnionResult selectUnion(const VoxelSet& inside, const std::vector<const VoxelSet
   const double invTotal = total ? 1.0 / double(total) : 0.0;
   // Work on the inside voxels only. Candidates covering nothing, or exactly
   // what an earlier one covers, never improve an optimum.
-  const std::vector<std::uint32_t> positions = inside.members();
-  SelectionProblem pb({VoxelSet(positions.size()).complemented()}, 0);
+  SelectionProblem pb({VoxelSet(total).complemented()}, 0);
   std::vector<double> sizes;
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    VoxelSet c = candidates[i]->gather(positions);
+    VoxelSet c = candidates[i]->compress(inside);
     if (c.none()) continue;
     const std::size_t size = c.count();
     if (pb.add(std::move(c), std::uint32_t(i))) sizes.push_back(double(size));
