@@ -21,12 +21,12 @@ namespace {
 // whatever the number of voxels.
 class BranchAndBound {
  public:
-  BranchAndBound(const SelectionProblem& pb, const SelectionClasses& classes,
+  BranchAndBound(const SelectionClasses& classes, std::size_t boundChannel,
                  const SelectionObjective& objective, const SelectionOptions& options)
       : classes_(classes),
         objective_(objective),
-        n_(pb.items().size()),
-        boundChannel_(pb.boundChannel()),
+        n_(classes.itemCount()),
+        boundChannel_(boundChannel),
         budget_(options.nodeBudget),
         deadline_(options.deadline),
         classWords_((classes.size() + 63) / 64),
@@ -239,10 +239,14 @@ ChannelCounts SelectionProblem::counts(const VoxelSet& united) const {
 
 Selection solveSelection(const SelectionProblem& problem, const SelectionObjective& objective,
                          const SelectionOptions& options) {
+  return solveSelection(SelectionClasses(problem), problem.boundChannel(), objective, options);
+}
+
+Selection solveSelection(const SelectionClasses& classes, std::size_t boundChannel,
+                         const SelectionObjective& objective, const SelectionOptions& options) {
   Selection s;
-  const SelectionClasses classes(problem);
   s.energy = localSearch(classes, objective, options, s.chosen);
-  BranchAndBound bb(problem, classes, objective, options);
+  BranchAndBound bb(classes, boundChannel, objective, options);
   s.provedOptimal = bb.run(s.chosen, s.energy);
   return s;
 }

@@ -10,7 +10,9 @@
 ///
 /// The search: a greedy descent with perturbed restarts gives the incumbent,
 /// then a depth-first branch and bound over the items in order proves it
-/// optimal or improves it, unless a node budget or a deadline stops it.
+/// optimal or improves it, unless a node budget or a deadline stops it. Both
+/// run on classes of voxels (optimize/selection_classes.h), where every count
+/// is exact, so their cost follows the number of classes, not of voxels.
 
 #include <array>
 #include <chrono>
@@ -111,6 +113,14 @@ struct Selection {
 /// best found, provedOptimal false). Deterministic for a given seed.
 Selection solveSelection(const SelectionProblem& problem, const SelectionObjective& objective,
                          const SelectionOptions& options = {});
+
+class SelectionClasses;
+
+/// The same for a problem given by its classes alone (the items in search
+/// order, as SelectionClasses numbers them) and its bound channel; the same
+/// answer as for the SelectionProblem the classes were built from.
+Selection solveSelection(const SelectionClasses& classes, std::size_t boundChannel,
+                         const SelectionObjective& objective, const SelectionOptions& options = {});
 
 /// The seed of one random stream of a run seeded with `runSeed`: `stream`
 /// itself for the default run seed 1, a well-mixed other value for any other

@@ -1,5 +1,6 @@
 #include "optimize/selection_classes.h"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cassert>
@@ -8,20 +9,6 @@ namespace csgvox {
 namespace {
 
 using Word = std::uint64_t;
-
-// Transposes a 64 x 64 bit matrix in place: bit j of m[i] becomes bit i of
-// m[j]. Each round swaps the off-diagonal blocks of size s within every
-// 2s x 2s block.
-void transpose64(std::array<Word, 64>& m) {
-  Word mask = 0x00000000FFFFFFFFULL;
-  for (unsigned s = 32; s != 0; s >>= 1, mask ^= mask << s) {
-    for (unsigned k = 0; k < 64; k = ((k | s) + 1) & ~s) {
-      const Word t = ((m[k] >> s) ^ m[k | s]) & mask;
-      m[k] ^= t << s;
-      m[k | s] ^= t;
-    }
-  }
-}
 
 Word hashRow(const Word* row, std::size_t words) {
   Word h = 0x84222325cbf29ce4ULL;
@@ -83,56 +70,127 @@ class RowTable {
 }  // namespace
 
 SelectionClasses::SelectionClasses(const SelectionProblem& problem) {
-  const auto& items = problem.items();
-  const std::size_t n = items.size();
-  const std::size_t groups = (n + 63) / 64;
-  const std::size_t words = (problem.universe() + 63) / 64;
-  RowTable table(groups);
-  // The rows of the 64 voxels of one universe word: block[v * groups + g].
-  std::vector<Word> block(64 * groups);
-  std::array<Word, 64> m;
-  for (std::size_t w = 0; w < words; ++w) {
-    Word occupied = 0;
-    for (std::size_t g = 0; g < groups; ++g) {
-      Word any = 0;
-      for (std::size_t i = 0; i < 64; ++i) {
-        const std::size_t a = g * 64 + i;
-        m[i] = a < n ? items[a].set.words()[w] : 0;
-        any |= m[i];
-      }
-      occupied |= any;
-      if (any) transpose64(m);
-      for (std::size_t v = 0; v < 64; ++v) block[v * groups + g] = any ? m[v] : 0;
-    }
-    std::array<Word, 2> channel{};
-    for (std::size_t k = 0; k < problem.channelCount(); ++k) {
-      channel[k] = problem.channel(k).words()[w];
-    }
-    std::size_t last = std::size_t(-1);
-    for (Word bits = occupied; bits; bits &= bits - 1) {
-      const std::size_t v = std::size_t(std::countr_zero(bits));
-      const Word* row = block.data() + v * groups;
-      // Neighbouring voxels mostly share their class.
-      if (last == std::size_t(-1) || !sameRow(table.row(last), row, groups)) last = table.find(row);
-      if (last == weights_.size()) weights_.push_back({});
-      for (std::size_t k = 0; k < channel.size(); ++k) weights_[last][k] += (channel[k] >> v) & 1;
+  std::vector<const VoxelSet*> generators, channels;
+  std::vector<GeneratedItem> items;
+  for (const SelectionItem& item : problem.items()) {
+    items.push_back({std::uint32_t(generators.size()), false});
+    generators.push_back(&item.set);
+  }
+  for (std::size_t k = 0; k < problem.channelCount(); ++k) channels.push_back(&problem.channel(k));
+  build(generators, items, VoxelSet(problem.universe()).complemented(), channels);
+}
+
+SelectionClasses::SelectionClasses(std::span<const VoxelSet* const> generators,
+                                   std::span<const GeneratedItem> items, const VoxelSet& mask,
+                                   std::span<const VoxelSet* const> channels) {
+  build(generators, items, mask, channels);
+}
+
+// Walks the mask's words in order keeping the row (the generators holding
+// the current voxel) up to date from where generators start and stop: a word
+// costs one pass over the generators plus the few places where some
+// generator's membership changes, and a class is looked up only there.
+void SelectionClasses::build(std::span<const VoxelSet* const> generators,
+                             std::span<const GeneratedItem> items, const VoxelSet& mask,
+                             std::span<const VoxelSet* const> channels) {
+  assert(channels.size() <= ChannelCounts().size());
+  // Only the generators of some item split classes; bit b of a row is
+  // generator used[b].
+  std::vector<std::uint32_t> bitOf(generators.size(), ~std::uint32_t(0));
+  std::vector<const Word*> used;
+  for (const GeneratedItem& item : items) {
+    if (bitOf[item.generator] == ~std::uint32_t(0)) {
+      bitOf[item.generator] = std::uint32_t(used.size());
+      used.push_back(generators[item.generator]->words().data());
     }
   }
-  // Items of each class, then classes of each item (ascending, by counting).
-  const std::size_t classes = weights_.size();
-  classStart_.assign(classes + 1, 0);
+  const std::size_t g = used.size();
+  const std::size_t rowWords = std::max<std::size_t>(1, (g + 63) / 64);
+  RowTable table(rowWords);
+  std::vector<Word> row(rowWords, 0);  // generators holding the current voxel
+  std::vector<Word> below(g, 0);       // generator b's bit of the voxel before this word
+  std::vector<std::uint32_t> changes;  // (bit << 20 | b) where generator b starts or stops
+  assert(g < (1u << 20));
+  constexpr std::size_t kUnknown = std::size_t(-1);
+  std::size_t current = kUnknown;  // the current row's class, once looked up
+  const auto maskWords = mask.words();
+  bool continuous = false;  // the previous word was walked
+  for (std::size_t w = 0; w < maskWords.size(); ++w) {
+    const Word m = maskWords[w];
+    if (m == 0) {
+      continuous = false;
+      continue;
+    }
+    if (!continuous) {
+      // The row of the voxel before this word, from scratch.
+      std::fill(row.begin(), row.end(), 0);
+      for (std::size_t b = 0; b < g; ++b) {
+        below[b] = w > 0 ? used[b][w - 1] >> 63 : 0;
+        row[b / 64] |= below[b] << (b % 64);
+      }
+      current = kUnknown;
+      continuous = true;
+    }
+    changes.clear();
+    for (std::size_t b = 0; b < g; ++b) {
+      const Word x = used[b][w];
+      const Word flips = x ^ ((x << 1) | below[b]);
+      below[b] = x >> 63;
+      for (Word bits = flips; bits; bits &= bits - 1) {
+        changes.push_back(std::uint32_t(std::countr_zero(bits)) << 20 | std::uint32_t(b));
+      }
+    }
+    std::sort(changes.begin(), changes.end());
+    std::array<Word, 2> channel{};
+    for (std::size_t k = 0; k < channels.size(); ++k) channel[k] = channels[k]->words()[w];
+    // Voxels [from, to) of this word are in the current row's class.
+    const auto credit = [&](std::size_t from, std::size_t to) {
+      if (from == to) return;
+      const Word run = (to == 64 ? ~Word(0) : (Word(1) << to) - 1) & ~((Word(1) << from) - 1);
+      if ((m & run) == 0) return;
+      if (current == kUnknown) {
+        current = table.find(row.data());
+        if (current == weights_.size()) weights_.push_back({});
+      }
+      for (std::size_t k = 0; k < channels.size(); ++k) {
+        weights_[current][k] += std::size_t(std::popcount(channel[k] & run));
+      }
+    };
+    std::size_t from = 0;
+    for (std::size_t c = 0; c < changes.size();) {
+      const std::size_t bit = changes[c] >> 20;
+      credit(from, bit);
+      for (; c < changes.size() && (changes[c] >> 20) == bit; ++c) {
+        const std::size_t b = changes[c] & ((1u << 20) - 1);
+        row[b / 64] ^= Word(1) << (b % 64);
+      }
+      current = kUnknown;
+      from = bit;
+    }
+    credit(from, 64);
+  }
+  // Items of each class (a class in no item is dropped), then classes of
+  // each item (ascending, by counting).
+  const std::size_t n = items.size();
   std::vector<std::size_t> perItem(n + 1, 0);
-  for (std::size_t c = 0; c < classes; ++c) {
-    const Word* row = table.row(c);
-    for (std::size_t g = 0; g < groups; ++g) {
-      for (Word bits = row[g]; bits; bits &= bits - 1) {
-        const std::size_t a = g * 64 + std::size_t(std::countr_zero(bits));
+  std::vector<ChannelCounts> kept;
+  classStart_.assign(1, 0);
+  for (std::size_t c = 0; c < weights_.size(); ++c) {
+    const Word* r = table.row(c);
+    const std::size_t first = classItems_.size();
+    for (std::size_t a = 0; a < n; ++a) {
+      const std::uint32_t b = bitOf[items[a].generator];
+      if (bool(r[b / 64] >> (b % 64) & 1) != items[a].complement) {
         classItems_.push_back(std::uint32_t(a));
         ++perItem[a + 1];
       }
     }
-    classStart_[c + 1] = classItems_.size();
+    if (classItems_.size() == first) continue;
+    kept.push_back(weights_[c]);
+    classStart_.push_back(classItems_.size());
   }
+  weights_ = std::move(kept);
+  const std::size_t classes = weights_.size();
   itemStart_.assign(n + 1, 0);
   for (std::size_t a = 0; a < n; ++a) itemStart_[a + 1] = itemStart_[a] + perItem[a + 1];
   itemClasses_.resize(classItems_.size());
@@ -140,7 +198,6 @@ SelectionClasses::SelectionClasses(const SelectionProblem& problem) {
   for (std::size_t c = 0; c < classes; ++c) {
     for (std::uint32_t a : itemsOf(c)) itemClasses_[next[a]++] = std::uint32_t(c);
   }
-  assert(n == 0 || next.back() == itemStart_[n]);
 }
 
 }  // namespace csgvox

@@ -15,13 +15,28 @@
 
 namespace csgvox {
 
-/// Classes of a SelectionProblem's universe, with the items of each class and
-/// the classes of each item.
+/// An item given by a generator set: the members of a mask that the
+/// generator holds, or, when `complement`, those it does not hold.
+struct GeneratedItem {
+  std::uint32_t generator = 0;  ///< index of the generator
+  bool complement = false;      ///< the mask's members outside the generator
+};
+
+/// Classes of a selection's universe, with the items of each class and the
+/// classes of each item.
 class SelectionClasses {
  public:
   /// The classes of `problem`'s universe, numbered in the order of their first
   /// voxel.
   explicit SelectionClasses(const SelectionProblem& problem);
+  /// The classes of a universe given as the members of `mask` (in their
+  /// order), without building it: item a is items[a] over `generators` (sets
+  /// of mask's size), and channel k's voxels are the members of channels[k]
+  /// (at most two, subsets of mask). Works in the generators' own voxel order,
+  /// where a class runs along rows of voxels.
+  SelectionClasses(std::span<const VoxelSet* const> generators,
+                   std::span<const GeneratedItem> items, const VoxelSet& mask,
+                   std::span<const VoxelSet* const> channels);
 
   /// Number of classes.
   std::size_t size() const { return weights_.size(); }
@@ -39,6 +54,9 @@ class SelectionClasses {
   }
 
  private:
+  void build(std::span<const VoxelSet* const> generators, std::span<const GeneratedItem> items,
+             const VoxelSet& mask, std::span<const VoxelSet* const> channels);
+
   std::vector<ChannelCounts> weights_;
   std::vector<std::size_t> itemStart_, classStart_;
   std::vector<std::uint32_t> itemClasses_, classItems_;
