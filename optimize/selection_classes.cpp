@@ -110,6 +110,7 @@ void SelectionClasses::build(std::span<const VoxelSet* const> generators,
   std::vector<Word> row(rowWords, 0);  // generators holding the current voxel
   std::vector<Word> below(g, 0);       // generator b's bit of the voxel before this word
   std::vector<std::uint32_t> changes;  // (bit << 20 | b) where generator b starts or stops
+  std::vector<std::uint32_t> byBit;    // the generators of `changes`, by bit
   assert(g < (1u << 20));
   constexpr std::size_t kUnknown = std::size_t(-1);
   std::size_t current = kUnknown;  // the current row's class, once looked up
@@ -132,15 +133,27 @@ void SelectionClasses::build(std::span<const VoxelSet* const> generators,
       continuous = true;
     }
     changes.clear();
+    std::array<std::uint32_t, 64> perBit{};
+    Word changed = 0;  // bits where some generator starts or stops
     for (std::size_t b = 0; b < g; ++b) {
       const Word x = used[b][w];
       const Word flips = x ^ ((x << 1) | below[b]);
       below[b] = x >> 63;
+      changed |= flips;
       for (Word bits = flips; bits; bits &= bits - 1) {
-        changes.push_back(std::uint32_t(std::countr_zero(bits)) << 20 | std::uint32_t(b));
+        const std::uint32_t bit = std::uint32_t(std::countr_zero(bits));
+        changes.push_back(bit << 20 | std::uint32_t(b));
+        ++perBit[bit];
       }
     }
-    std::sort(changes.begin(), changes.end());
+    // The generators by bit (a counting sort): bit v's at [first[v], first[v] + perBit[v]).
+    std::array<std::uint32_t, 64> first{};
+    for (std::uint32_t v = 1, sum = 0; v < 64; ++v) first[v] = sum += perBit[v - 1];
+    byBit.resize(changes.size());
+    {
+      std::array<std::uint32_t, 64> next = first;
+      for (std::uint32_t c : changes) byBit[next[c >> 20]++] = c & ((1u << 20) - 1);
+    }
     std::array<Word, 2> channel{};
     for (std::size_t k = 0; k < channels.size(); ++k) channel[k] = channels[k]->words()[w];
     // Voxels [from, to) of this word are in the current row's class.
@@ -157,12 +170,11 @@ void SelectionClasses::build(std::span<const VoxelSet* const> generators,
       }
     };
     std::size_t from = 0;
-    for (std::size_t c = 0; c < changes.size();) {
-      const std::size_t bit = changes[c] >> 20;
+    for (Word bits = changed; bits; bits &= bits - 1) {
+      const std::size_t bit = std::size_t(std::countr_zero(bits));
       credit(from, bit);
-      for (; c < changes.size() && (changes[c] >> 20) == bit; ++c) {
-        const std::size_t b = changes[c] & ((1u << 20) - 1);
-        row[b / 64] ^= Word(1) << (b % 64);
+      for (std::uint32_t c = first[bit]; c < first[bit] + perBit[bit]; ++c) {
+        row[byBit[c] / 64] ^= Word(1) << (byBit[c] % 64);
       }
       current = kUnknown;
       from = bit;
