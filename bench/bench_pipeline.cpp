@@ -4,6 +4,13 @@
 // tree at res 160 (mesh.ply, without writing it) and the fit metrics.
 // Run: build/bench/bench_pipeline [data/<part>/tree.json] [noise]
 //
+// Or: build/bench/bench_pipeline --optimisation [data/<part>/tree.json]
+//       [points] [repeats] [threads]
+// times Wu's optimisations alone (constructCsg: the subtrees, the union and
+// its refinement) at res 64 and 128 on one scan of the part, `repeats` times
+// each (default 5; threads: all cores by default), after preparing the candidates' description sets
+// once; prints every run and the median, and whether every run built the same tree.
+//
 // Peak memory: getrusage's maxrss only ever grows within a process, so each
 // row runs in a child process of its own (fork) that starts small, before the
 // parent has built anything large or started TBB's threads. A row's figures
@@ -12,20 +19,27 @@
 
 #include <sys/resource.h>
 #include <sys/wait.h>
+#include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include "bench_common.h"
+#include "core/nearest_neighbors.h"
 #include "io/tree_json.h"
 #include "mesh/fit_metrics.h"
 #include "mesh/mesh_export.h"
 #include "mesh/surface_sampler.h"
+#include "optimize/csg_construction.h"
+#include "pipeline/detect_and_fit.h"
 #include "pipeline/reconstruct.h"
+#include "voxel/description_sets.h"
 
 namespace {
 
@@ -97,9 +111,82 @@ int runRow(const CsgTree& part, std::size_t points, int resolution, double noise
   return rec.ok() ? 0 : 1;
 }
 
+// The --optimisation mode: constructCsg alone, as reconstruct() calls it.
+int runOptimisation(const CsgTree& part, std::size_t points, int repeats) {
+  SampleOptions so;
+  so.points = points;
+  so.seed = 1;
+  const PointCloud scan = sampleSurface(part, so).cloud;
+  std::printf(
+      "optimisation (constructCsg) alone, %zu points; median wall-clock and CPU seconds (all "
+      "threads)\n",
+      points);
+  std::printf("%4s %10s %6s %16s %9s %9s  %s\n", "res", "candidates", "prims", "tree_hash",
+              "median_s", "cpu_s", "runs (wall)");
+  for (int res : {64, 128}) {
+    DetectAndFitOptions fo;
+    fo.resolution = res;
+    const SurfacesAndCandidates found = detectAndFit(scan, fo);
+    if (!found.ok()) {
+      std::printf("%4d detection failed\n", res);
+      return 1;
+    }
+    const VoxelLabels labels = labelVoxels(found.grid, scan, LabelOptions{});
+    std::vector<CsgTree> candidates;
+    for (const Candidate& c : found.hypotheses.candidates) candidates.push_back(c.tree);
+    const std::vector<DescriptionSet> d = describeAll(candidates, found.grid, labels);
+    ConstructOptions co;
+    co.snapDistance = found.grid.voxelSize();
+    const NearestNeighbors index(scan.points);
+    const double nearScan = std::max(0.5 * found.grid.voxelSize(), 3.0 * found.detection.noise);
+    co.scannedAt = [&](const Vec3& p) {
+      double d2 = 0.0;
+      index.nearest(p, &d2);
+      return d2 <= nearScan * nearScan;
+    };
+    std::vector<double> times, cpu;
+    CsgTree first;
+    bool same = true;
+    for (int r = 0; r < repeats; ++r) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const double cpu0 = cpuSeconds();
+      const Construction c = constructCsg(candidates, d, labels.inside, co);
+      times.push_back(seconds(t0));
+      cpu.push_back(cpuSeconds() - cpu0);
+      if (r == 0) first = c.tree;
+      same = same && c.tree == first;
+    }
+    const auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    std::printf("%4d %10zu %6zu %016zx %9.3f ", res, candidates.size(), first.primitiveCount(),
+                first.structuralHash(), median(times));
+    std::printf("%9.3f ", median(cpu));
+    for (double t : times) std::printf(" %.3f", t);
+    std::printf("%s\n", same ? "" : "  (trees differ between runs)");
+    std::fflush(stdout);
+    if (!same) return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--optimisation") {
+    const std::string path =
+        argc > 2 ? argv[2] : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
+    const std::size_t points = argc > 3 ? std::size_t(std::atoll(argv[3])) : 100000;
+    const int repeats = argc > 4 ? std::max(1, std::atoi(argv[4])) : 5;
+    const int threads = argc > 5 ? std::max(1, std::atoi(argv[5])) : 0;
+    std::unique_ptr<tbb::global_control> limit;
+    if (threads > 0) {
+      limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    std::size_t(threads));
+    }
+    return runOptimisation(readTreeJson(std::filesystem::path(path)), points, repeats);
+  }
   const std::string treePath =
       argc > 1 ? argv[1] : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
   const double noise = argc > 2 ? std::atof(argv[2]) : 0.0;

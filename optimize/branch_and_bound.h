@@ -10,7 +10,9 @@
 ///
 /// The search: a greedy descent with perturbed restarts gives the incumbent,
 /// then a depth-first branch and bound over the items in order proves it
-/// optimal or improves it, unless a node budget or a deadline stops it.
+/// optimal or improves it, unless a node budget or a deadline stops it. Both
+/// run on classes of voxels (optimize/selection_classes.h), where every count
+/// is exact, so their cost follows the number of classes, not of voxels.
 
 #include <array>
 #include <chrono>
@@ -42,10 +44,8 @@ class SelectionObjective {
 
 /// One item of a SelectionProblem.
 struct SelectionItem {
-  std::uint32_t id = 0;              ///< the caller's index of the item
-  VoxelSet set;                      ///< voxels the item adds to the union
-  std::array<VoxelSet, 2> parts;     ///< set ∩ channel k (empty beyond the channel count)
-  std::vector<std::uint32_t> words;  ///< indices of the non-zero 64-bit words of `set`
+  std::uint32_t id = 0;  ///< the caller's index of the item
+  VoxelSet set;          ///< voxels the item adds to the union
 };
 
 /// Items over a universe of voxels, and the channels the energy counts in.
@@ -113,6 +113,14 @@ struct Selection {
 /// best found, provedOptimal false). Deterministic for a given seed.
 Selection solveSelection(const SelectionProblem& problem, const SelectionObjective& objective,
                          const SelectionOptions& options = {});
+
+class SelectionClasses;
+
+/// The same for a problem given by its classes alone (the items in search
+/// order, as SelectionClasses numbers them) and its bound channel; the same
+/// answer as for the SelectionProblem the classes were built from.
+Selection solveSelection(const SelectionClasses& classes, std::size_t boundChannel,
+                         const SelectionObjective& objective, const SelectionOptions& options = {});
 
 /// The seed of one random stream of a run seeded with `runSeed`: `stream`
 /// itself for the default run seed 1, a well-mixed other value for any other

@@ -4,6 +4,8 @@
 #include <cassert>
 
 #include "optimize/branch_and_bound.h"
+#include "optimize/distinct_items.h"
+#include "optimize/selection_classes.h"
 
 namespace csgvox {
 namespace {
@@ -65,28 +67,39 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
   assert(neighbours.size() == neighbourIds.size());
   SubtreeResult result;
   result.actionCount = 2 * neighbours.size();
-  // Work on the root's own voxels only.
-  const std::vector<std::uint32_t> positions = root.members();
-  VoxelSet localInside = inside.gather(positions);
-  VoxelSet localOutside = localInside.complemented();
-  const std::size_t insideCount = localInside.count();
-  const std::size_t outsideCount = positions.size() - insideCount;
+  // Work on the root's own voxels only, in the grid's order: an action's
+  // item is the part of the root it removes, given by its neighbour
+  // (GeneratedItem), never built.
+  const VoxelSet rootInside = root & inside;
+  const VoxelSet rootOutside = root - inside;
+  const std::size_t rootCount = root.count();
+  const std::size_t insideCount = rootInside.count();
+  const std::size_t outsideCount = rootCount - insideCount;
   double invL = 0.0;
   if (options.minFeatureVoxels > 0.0) {
     invL = options.minFeatureVoxels / double(std::max<std::size_t>(1, insideCount));
   } else {
     invL = result.actionCount ? 1.0 / double(result.actionCount) : 0.0;
   }
-  SelectionProblem pb({std::move(localInside), std::move(localOutside)}, 1);
   // Useful actions: those removing at least one outside voxel; an action that
   // removes only inside voxels never belongs to an optimum. Actions with the
   // same effect are kept once. An item's id is 2i (+1 for subtract).
-  std::vector<double> score;
+  struct Action {
+    std::uint32_t id;
+    GeneratedItem item;
+    double score;
+  };
+  std::vector<Action> actions;
+  DistinctItems distinct(root);
   for (std::size_t i = 0; i < neighbours.size() && outsideCount > 0; ++i) {
-    const VoxelSet local = neighbours[i]->gather(positions);
+    const std::size_t inRoot = VoxelSet::countAnd(*neighbours[i], root);
+    const std::size_t inRootInside = VoxelSet::countAnd(*neighbours[i], rootInside);
     for (int sub = 0; sub < 2; ++sub) {
-      VoxelSet removes = sub ? local : local.complemented();
-      const std::size_t removesOut = VoxelSet::countAnd(removes, pb.channel(1));
+      // Intersecting removes the root's voxels outside the neighbour,
+      // subtracting those inside it.
+      const std::size_t removedCount = sub ? inRoot : rootCount - inRoot;
+      const std::size_t removesOut =
+          sub ? inRoot - inRootInside : outsideCount - (inRoot - inRootInside);
       if (removesOut == 0) continue;
       // An action removing k outside voxels improves the fit term by at most
       // alpha * k / |V+(root)| in any solution (the denominator never drops
@@ -100,24 +113,30 @@ SubtreeResult selectSubtree(const VoxelSet& root, const VoxelSet& inside,
       }
       // Order: most outside removed per inside lost first (good incumbents early).
       const double out = double(removesOut);
-      const double removedCount = double(removes.count());
-      if (pb.add(std::move(removes), std::uint32_t(2 * i + std::size_t(sub)))) {
-        score.push_back(out / (1.0 + removedCount - out));
+      if (distinct.add(*neighbours[i], sub == 0, removedCount)) {
+        actions.push_back({std::uint32_t(2 * i + std::size_t(sub)),
+                           GeneratedItem{std::uint32_t(i), sub == 0},
+                           out / (1.0 + double(removedCount) - out)});
       }
     }
   }
-  result.usefulActions = pb.items().size();
-  pb.sortByDescending(score);
+  result.usefulActions = actions.size();
+  std::stable_sort(actions.begin(), actions.end(),
+                   [](const Action& a, const Action& b) { return a.score > b.score; });
+  std::vector<GeneratedItem> items;
+  for (const Action& a : actions) items.push_back(a.item);
+  const std::vector<const VoxelSet*> channels{&rootInside, &rootOutside};
+  const SelectionClasses classes(neighbours, items, root, channels);
 
-  const Selection best =
-      solveSelection(pb, TruncationObjective(insideCount, outsideCount, invL, options.alpha),
-                     phaseSearch(options, 3, kRestartStream));
+  const Selection best = solveSelection(
+      classes, 1, TruncationObjective(insideCount, outsideCount, invL, options.alpha),
+      phaseSearch(options, 3, kRestartStream));
   result.provedOptimal = best.provedOptimal;
   result.energy = best.energy;
   result.voxels = root;
   for (std::size_t a = 0; a < best.chosen.size(); ++a) {
     if (!best.chosen[a]) continue;
-    const std::size_t idx = pb.items()[a].id;
+    const std::size_t idx = actions[a].id;
     SubtreeAction act{neighbourIds[idx / 2], idx % 2 == 1};
     result.actions.push_back(act);
     if (act.subtract) {

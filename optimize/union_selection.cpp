@@ -4,6 +4,8 @@
 #include <limits>
 
 #include "optimize/branch_and_bound.h"
+#include "optimize/distinct_items.h"
+#include "optimize/selection_classes.h"
 
 namespace csgvox {
 namespace {
@@ -62,32 +64,42 @@ UnionResult selectUnion(const VoxelSet& inside, const std::vector<const VoxelSet
     invM = candidates.empty() ? 0.0 : 1.0 / double(candidates.size());
   }
   const double invTotal = total ? 1.0 / double(total) : 0.0;
-  // Work on the inside voxels only. Candidates covering nothing, or exactly
-  // what an earlier one covers, never improve an optimum.
-  const std::vector<std::uint32_t> positions = inside.members();
-  SelectionProblem pb({VoxelSet(positions.size()).complemented()}, 0);
-  std::vector<double> sizes;
+  // Work on the inside voxels only, in the grid's order: a candidate's item
+  // is the inside voxels it covers, given by the candidate (GeneratedItem),
+  // never built. Candidates covering nothing, or exactly what an earlier one
+  // covers, never improve an optimum.
+  struct Item {
+    std::uint32_t candidate;
+    double size;
+  };
+  std::vector<Item> order;
+  DistinctItems distinct(inside);
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    VoxelSet c = candidates[i]->gather(positions);
-    if (c.none()) continue;
-    const std::size_t size = c.count();
-    if (pb.add(std::move(c), std::uint32_t(i))) sizes.push_back(double(size));
+    const std::size_t size = VoxelSet::countAnd(*candidates[i], inside);
+    if (size == 0) continue;
+    if (distinct.add(*candidates[i], false, size))
+      order.push_back({std::uint32_t(i), double(size)});
   }
   // Largest first: good incumbents early, strong suffix bounds.
-  pb.sortByDescending(sizes);
-  const Selection best = solveSelection(pb, CoverageObjective(invM, options.beta, invTotal),
+  std::stable_sort(order.begin(), order.end(),
+                   [](const Item& a, const Item& b) { return a.size > b.size; });
+  std::vector<GeneratedItem> items;
+  for (const Item& item : order) items.push_back({item.candidate, false});
+  const std::vector<const VoxelSet*> channels{&inside};
+  const SelectionClasses classes(candidates, items, inside, channels);
+  const Selection best = solveSelection(classes, 0, CoverageObjective(invM, options.beta, invTotal),
                                         phaseSearch(options, 8, kRestartStream));
   result.provedOptimal = best.provedOptimal;
   result.energy = best.energy;
-  VoxelSet covered(pb.universe());
+  VoxelSet covered(inside.size());
   for (std::size_t i = 0; i < best.chosen.size(); ++i) {
     if (best.chosen[i]) {
-      result.chosen.push_back(pb.items()[i].id);
-      covered |= pb.items()[i].set;
+      result.chosen.push_back(order[i].candidate);
+      covered |= *candidates[order[i].candidate];
     }
   }
   std::sort(result.chosen.begin(), result.chosen.end());
-  result.covered = covered.count();
+  result.covered = VoxelSet::countAnd(covered, inside);
   return result;
 }
 

@@ -94,7 +94,7 @@ TEST(SelectionProblem, KeepsOneItemPerSetAndSortsStably) {
   EXPECT_EQ(pb.items()[0].id, 1u);
   EXPECT_EQ(pb.items()[1].id, 0u);
   EXPECT_EQ(pb.items()[2].id, 3u);
-  EXPECT_EQ(pb.items()[2].words, std::vector<std::uint32_t>{0});
+  EXPECT_EQ(pb.items()[2].set, a | b);
 }
 
 TEST(StreamSeed, TheDefaultRunKeepsEachStreamsConstant) {

@@ -194,5 +194,25 @@ TEST(VoxelSet, IntersectsFindsASingleCommonVoxelAnywhere) {
   }
 }
 
+// compress(mask) is gather(mask.members()) on every level, whatever the
+// masks' densities and wherever the packed words start and end.
+TEST(VoxelSet, CompressIsGatherOfTheMasksMembersOnEveryLevel) {
+  std::mt19937_64 rng(13);
+  for (std::size_t bits : kSizes) {
+    for (double density : {0.0, 0.1, 0.5, 0.9, 1.0}) {
+      const VoxelSet a = randomSet(bits, 0.5, rng), mask = randomSet(bits, density, rng);
+      const VoxelSet expected = a.gather(mask.members());
+      ASSERT_EQ(expected.size(), mask.count());
+      for (SimdLevel level : supportedSimdLevels()) {
+        const ScopedSimdLevel scoped(level);
+        SCOPED_TRACE(testing::Message()
+                     << bits << " bits, mask density " << density << ", " << simdLevelName(level));
+        EXPECT_EQ(a.compress(mask), expected);
+        EXPECT_EQ(mask.compress(mask), VoxelSet(mask.count()).complemented());
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace csgvox

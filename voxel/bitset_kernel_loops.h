@@ -15,6 +15,9 @@
 ///    `storeTail(p, m, v)` (writes no word outside m);
 ///  - `bitAnd(x, y)`, `bitAndNot(x, y)` = x & ~y, `bitOr(x, y)`, and
 ///    `any(v)`: some bit of v is set;
+///  - for one word: `Word extractBits(Word x, Word m)`, the bits of x at the
+///    set bits of m packed at the bottom (BMI2's PEXT), and
+///    `std::size_t bitCount(Word m)`;
 ///  - counting: `Counts zeroCounts()`, `Counts countBits(Counts c, Vec v)`
 ///    (c plus the set bits of v in narrow lanes), `Sum zeroSum()`,
 ///    `Sum widen(Sum s, Counts c)`, `std::size_t total(Sum s)`, and
@@ -148,13 +151,35 @@ void applyOp(Word* a, const Word* b, std::size_t n) {
   }
 }
 
+/// Packs the bits of a that mask selects into out (zeroed, as many bits as
+/// mask has set), word by word.
+template <class V>
+void compress(const Word* a, const Word* mask, std::size_t n, Word* out) {
+  std::size_t at = 0;  // bits written so far
+  for (std::size_t i = 0; i < n; ++i) {
+    const Word m = mask[i];
+    if (m == 0) continue;
+    const Word bits = V::extractBits(a[i], m);
+    const std::size_t k = V::bitCount(m);
+    const std::size_t shift = at & 63;
+    out[at >> 6] |= bits << shift;
+    if (shift != 0 && shift + k > 64) out[(at >> 6) + 1] |= bits >> (64 - shift);
+    at += k;
+  }
+}
+
 /// The kernel table of the primitives V.
 template <class V>
 constexpr BitsetKernels bitsetKernelsOf() {
-  return {countOp<V, BitOp::And>, countOp<V, BitOp::AndNot>,
-          countOp<V, BitOp::Or>,  countOne<V>,
-          intersects<V>,          applyOp<V, BitOp::And>,
-          applyOp<V, BitOp::Or>,  applyOp<V, BitOp::AndNot>};
+  return {countOp<V, BitOp::And>,
+          countOp<V, BitOp::AndNot>,
+          countOp<V, BitOp::Or>,
+          countOne<V>,
+          intersects<V>,
+          applyOp<V, BitOp::And>,
+          applyOp<V, BitOp::Or>,
+          applyOp<V, BitOp::AndNot>,
+          compress<V>};
 }
 
 }  // namespace csgvox::bitset_loops

@@ -28,6 +28,14 @@ struct Portable {
   static Vec bitAndNot(Vec x, Vec y) { return x & ~y; }
   static Vec bitOr(Vec x, Vec y) { return x | y; }
   static bool any(Vec v) { return v != 0; }
+  static Word extractBits(Word x, Word m) {
+    Word out = 0;
+    for (Word bit = 1; m != 0; m &= m - 1, bit <<= 1) {
+      if (x & m & (~m + 1)) out |= bit;
+    }
+    return out;
+  }
+  static std::size_t bitCount(Word m) { return std::size_t(std::popcount(m)); }
   static Counts zeroCounts() { return 0; }
   static Counts countBits(Counts c, Vec v) { return c + std::size_t(std::popcount(v)); }
   static Sum zeroSum() { return 0; }

@@ -32,6 +32,11 @@ struct BitsetKernels {
   void (*orInPlace)(std::uint64_t* a, const std::uint64_t* b, std::size_t n);
   /// a[i] &= ~b[i].
   void (*andNotInPlace)(std::uint64_t* a, const std::uint64_t* b, std::size_t n);
+  /// Packs the bits of `a` that `mask` selects: bit k of `out` is the bit of
+  /// `a` at the k-th set bit of `mask` (word 0 first). `out` must hold as many
+  /// bits as `mask` has set and start zeroed.
+  void (*compress)(const std::uint64_t* a, const std::uint64_t* mask, std::size_t n,
+                   std::uint64_t* out);
 };
 
 /// The portable kernels (plain loops; always available).

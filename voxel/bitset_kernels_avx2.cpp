@@ -44,6 +44,8 @@ struct Avx2 {
   static Vec bitAndNot(Vec x, Vec y) { return _mm256_andnot_si256(y, x); }
   static Vec bitOr(Vec x, Vec y) { return _mm256_or_si256(x, y); }
   static bool any(Vec v) { return !_mm256_testz_si256(v, v); }
+  static Word extractBits(Word x, Word m) { return _pext_u64(x, m); }
+  static std::size_t bitCount(Word m) { return std::size_t(_mm_popcnt_u64(m)); }
   static Counts zeroCounts() { return _mm256_setzero_si256(); }
   static Counts countBits(Counts c, Vec v) {
     const Vec lookup = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,  //

@@ -37,6 +37,8 @@ struct Avx512 {
   static Vec bitAndNot(Vec x, Vec y) { return x & ~y; }
   static Vec bitOr(Vec x, Vec y) { return x | y; }
   static bool any(Vec v) { return _mm512_test_epi64_mask(v, v) != 0; }
+  static Word extractBits(Word x, Word m) { return _pext_u64(x, m); }
+  static std::size_t bitCount(Word m) { return std::size_t(_mm_popcnt_u64(m)); }
   static Counts zeroCounts() { return _mm512_setzero_si512(); }
   static Counts countBits(Counts c, Vec v) { return _mm512_add_epi64(c, _mm512_popcnt_epi64(v)); }
   static Sum zeroSum() { return _mm512_setzero_si512(); }

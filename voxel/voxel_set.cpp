@@ -69,6 +69,14 @@ VoxelSet VoxelSet::gather(std::span<const std::uint32_t> positions) const {
   return local;
 }
 
+VoxelSet VoxelSet::compress(const VoxelSet& mask) const {
+  assert(bits_ == mask.bits_);
+  VoxelSet local(mask.count());
+  activeBitsetKernels().compress(words_.data(), mask.words_.data(), words_.size(),
+                                 local.words_.data());
+  return local;
+}
+
 VoxelSet VoxelSet::complemented() const {
   VoxelSet c = *this;
   for (std::uint64_t& w : c.words_) w = ~w;

@@ -46,6 +46,9 @@ class VoxelSet {
   /// The set restricted to `positions` and renumbered: bit p of the result is
   /// bit positions[p] of this set. Used to work inside a smaller universe.
   VoxelSet gather(std::span<const std::uint32_t> positions) const;
+  /// gather(mask.members()) at word speed: the set restricted to the members
+  /// of `mask` (of the same size) and renumbered in their order.
+  VoxelSet compress(const VoxelSet& mask) const;
   /// The complement within [0, size()).
   VoxelSet complemented() const;
 
