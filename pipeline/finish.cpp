@@ -40,7 +40,7 @@ FinishResult finishTree(const PointCloud& scan, const CsgTree& tree, const Voxel
   fo.nearDistance = options.nearDistance;
   fo.maxIterations = options.maxIterations;
   fo.maxPoints = options.maxPoints;
-  out.fit = fitTreeParameters(scan.points, scan.diagonal(), tree, fo);
+  out.fit = fitTreeParameters(scan, tree, fo);
   out.ran = out.fit.iterations > 0;
   out.before = fitnessOf(scan, tree, options.fitness, voxels);
   out.after = out.before;

@@ -16,11 +16,12 @@ namespace csgvox {
 
 /// Options of finishTree().
 struct FinishOptions {
-  bool enabled = true;     ///< run the finish (reconstruct(): hybrid method only)
-  int maxIterations = 25;  ///< Levenberg-Marquardt iterations at most (count)
-  double lossScale = 1.0;  ///< Huber scale of the point residuals, in εd
+  bool enabled = true;        ///< run the finish (reconstruct(): hybrid method only)
+  int maxIterations = 25;     ///< Levenberg-Marquardt iterations at most (count)
+  double lossScale = 1.0;     ///< Huber scale of the point residuals, in εd
   double nearDistance = 3.0;  ///< only points this close to the tree's surface drive it, in εd
-  SetOperationKind operations = SetOperationKind::Sardf;  ///< field the residuals go through
+  SetOperationKind operations = SetOperationKind::MinMax;  ///< field the residuals go through
+                                                           ///< (see primitives/tree_fitting.h)
   std::size_t maxPoints = 20000;  ///< more points than this are thinned to an even subset (count)
   /// The fitness that judges the result (reconstruct() sets it to the
   /// hybrid refinement's).

@@ -13,7 +13,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 #include <unordered_map>
 #include <vector>
@@ -167,6 +169,79 @@ class FlatTree {
   std::size_t leafCount_ = 0;
 };
 
+// The faces of a primitive: a box's six (2·axis + 1 for the positive side),
+// a cylinder's or cone's lateral surface (0) and caps (1 bottom, 2 top); the
+// others are one face. A face's value is the signed distance to its whole
+// surface (plane, infinite cylinder or cone), positive on the solid's side:
+// a point is tied to the face it was scanned on, so a point just inside an
+// edge is not read as lying on the other face (which would bias every face
+// outwards on a noisy scan).
+int faceCount(const Primitive& p) {
+  switch (p.type()) {
+    case PrimitiveType::Box:
+      return 6;
+    case PrimitiveType::Cylinder:
+    case PrimitiveType::Cone:
+      return 3;
+    default:
+      return 1;
+  }
+}
+
+double faceValue(const Primitive& p, int face, const Vec3& x) {
+  if (const auto* b = p.as<Box>()) {
+    const int i = face / 2;
+    const double local = b->axes.col(i).dot(x - b->center);
+    return b->halfSize[i] + (face % 2 == 1 ? -local : local);
+  }
+  if (const auto* c = p.as<Cylinder>()) {
+    const Vec3 w = x - c->center;
+    const double z = c->axis.dot(w);
+    if (face == 0) return c->radius - (w - z * c->axis).norm();
+    return 0.5 * c->height + (face == 1 ? z : -z);
+  }
+  if (const auto* c = p.as<Cone>()) {
+    const Vec3 w = x - c->center;
+    const double z = c->axis.dot(w);
+    if (face == 0) {
+      const double slope = (c->radiusTop - c->radiusBottom) / c->height;
+      const double r = c->radiusBottom + (z + 0.5 * c->height) * slope;
+      return (r - (w - z * c->axis).norm()) / std::sqrt(1.0 + slope * slope);
+    }
+    return 0.5 * c->height + (face == 1 ? z : -z);
+  }
+  return p.value(x);
+}
+
+// The outward unit normal of a face at x (from its value's gradient).
+Vec3 faceNormal(const Primitive& p, int face, const Vec3& x, double step) {
+  Vec3 g;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 d = Vec3::Zero();
+    d[k] = step;
+    g[k] = faceValue(p, face, x + d) - faceValue(p, face, x - d);
+  }
+  const double n = g.norm();
+  return n > 0.0 ? Vec3(-g / n) : Vec3::Zero();
+}
+
+// The face of `p` a point with normal `n` (or none: zero) was scanned on: of
+// the faces within `near` of it, the one whose normal agrees best, else the
+// nearest.
+int faceOf(const Primitive& p, const Vec3& x, const Vec3& n, double near, double step) {
+  int best = 0;
+  double bestScore = -std::numeric_limits<double>::infinity();
+  for (int f = 0; f < faceCount(p); ++f) {
+    const double v = std::abs(faceValue(p, f, x));
+    const double score = v > near || n.isZero() ? -1e300 - v : faceNormal(p, f, x, step).dot(n);
+    if (score > bestScore) {
+      bestScore = score;
+      best = f;
+    }
+  }
+  return best;
+}
+
 // What every residual shares: the parameterisation, the tree, the current
 // primitives (refreshed after each accepted step) and the scales.
 struct FitContext {
@@ -188,21 +263,26 @@ Scratch& scratch(const FitContext& c) {
 // The field at p (its leaves' values in s.leafValue) with `own` primitives
 // for the active leaves.
 double fieldAt(const FitContext& c, const Vec3& p, std::span<const int> active,
-               std::span<const Primitive> own, Scratch& s) {
+               std::span<const int> faces, std::span<const Primitive> own, Scratch& s) {
   for (std::size_t l = 0; l < c.current.size(); ++l) s.leafValue[l] = c.current[l].value(p);
   for (std::size_t a = 0; a < active.size(); ++a)
-    s.leafValue[std::size_t(active[a])] = own[a].value(p);
+    s.leafValue[std::size_t(active[a])] = faceValue(own[a], faces[a], p);
   return c.flat->forward(c.ops, s);
 }
 
-// One point's residual: the field there / εd. Its parameter blocks are those
-// of the leaves the field depended on at the start (`active`); the other
-// leaves hold the current state's primitives.
+// One point's residual: the field there / εd, each active leaf read on the
+// face the point was scanned on. Its parameter blocks are those of the
+// leaves the field depended on at the start (`active`); the other leaves
+// hold the current state's primitives.
 class PointResidual final : public ceres::CostFunction {
  public:
   PointResidual(const FitContext& context, const Vec3& point, std::vector<int> active,
-                std::vector<std::size_t> blocks)
-      : c_(context), p_(point), active_(std::move(active)), blocks_(std::move(blocks)) {
+                std::vector<int> faces, std::vector<std::size_t> blocks)
+      : c_(context),
+        p_(point),
+        active_(std::move(active)),
+        faces_(std::move(faces)),
+        blocks_(std::move(blocks)) {
     set_num_residuals(1);
     for (const std::size_t b : blocks_)
       mutable_parameter_block_sizes()->push_back(c_.parameters->blocks()[b].size);
@@ -230,7 +310,7 @@ class PointResidual final : public ceres::CostFunction {
       for (std::size_t k = 0; k < where_[a].size(); ++k) ptr[k] = parameters[where_[a][k]];
       if (!c_.parameters->leafPrimitive(std::size_t(active_[a]), ptr.data(), own[a])) return false;
     }
-    const double f = fieldAt(c_, p_, active_, own, s);
+    const double f = fieldAt(c_, p_, active_, faces_, own, s);
     residuals[0] = f * c_.invTolerance;
     if (jacobians == nullptr) return true;
     for (std::size_t r = 0; r < blocks_.size(); ++r) {
@@ -270,12 +350,13 @@ class PointResidual final : public ceres::CostFunction {
               c_.parameters->leafPrimitive(std::size_t(active_[a]), local.data(), minus);
           local[k][j] = keep;
           double slope = 0.0;
+          const int face = faces_[a];
           if (okPlus && okMinus) {
-            slope = (plus.value(p_) - minus.value(p_)) / (2.0 * h);
+            slope = (faceValue(plus, face, p_) - faceValue(minus, face, p_)) / (2.0 * h);
           } else if (okPlus) {
-            slope = (plus.value(p_) - own[a].value(p_)) / h;
+            slope = (faceValue(plus, face, p_) - faceValue(own[a], face, p_)) / h;
           } else if (okMinus) {
-            slope = (own[a].value(p_) - minus.value(p_)) / h;
+            slope = (faceValue(own[a], face, p_) - faceValue(minus, face, p_)) / h;
           }
           jacobian[j] += adjoint * slope;
         }
@@ -288,8 +369,33 @@ class PointResidual final : public ceres::CostFunction {
   const FitContext& c_;
   Vec3 p_;
   std::vector<int> active_;
+  std::vector<int> faces_;
   std::vector<std::size_t> blocks_;
   std::vector<std::vector<int>> where_;
+};
+
+// Holds a block to its start: (value − start) / sigma · weight per value.
+class PriorResidual final : public ceres::CostFunction {
+ public:
+  PriorResidual(const double* start, int size, double sigma, double weight)
+      : start_(start, start + size), scale_(weight / sigma) {
+    set_num_residuals(size);
+    mutable_parameter_block_sizes()->push_back(size);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const int n = int(start_.size());
+    for (int j = 0; j < n; ++j) residuals[j] = scale_ * (parameters[0][j] - start_[std::size_t(j)]);
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      std::fill(jacobians[0], jacobians[0] + n * n, 0.0);
+      for (int j = 0; j < n; ++j) jacobians[0][j * n + j] = scale_;
+    }
+    return true;
+  }
+
+ private:
+  std::vector<double> start_;
+  double scale_;
 };
 
 // Refreshes the context's current primitives after every accepted step.
@@ -325,12 +431,14 @@ double rmsField(const FitContext& c, std::span<const Vec3> points,
 
 }  // namespace
 
-TreeFitResult fitTreeParameters(std::span<const Vec3> points, double diagonal,
-                                const CsgTree& tree, const TreeFitOptions& options) {
+TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
+                                const TreeFitOptions& options) {
   if (tree.empty()) throw std::invalid_argument("fitTreeParameters: the tree is empty");
-  if (points.empty()) throw std::invalid_argument("fitTreeParameters: no points");
+  if (scan.empty()) throw std::invalid_argument("fitTreeParameters: no points");
+  const std::span<const Vec3> points = scan.points;
+  const double diagonal = scan.diagonal();
   if (!(diagonal > 0.0) || !std::isfinite(diagonal))
-    throw std::invalid_argument("fitTreeParameters: the diagonal must be > 0");
+    throw std::invalid_argument("fitTreeParameters: the points span no volume");
   TreeFitResult out;
   out.tree = tree;
 
@@ -352,15 +460,38 @@ TreeFitResult fitTreeParameters(std::span<const Vec3> points, double diagonal,
 
   // The points near the surface and the leaves the field depends on there.
   std::vector<double> field(points.size());
-  std::vector<std::vector<int>> active(points.size());
+  std::vector<std::vector<int>> active(points.size()), faces(points.size());
+  const double nearBand = options.nearDistance * tolerance;
+  const double cosLimit = std::cos(options.nearAngle * std::numbers::pi / 180.0);
   tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
     Scratch& s = scratch(c);
     for (std::size_t l = 0; l < input.size(); ++l) s.leafValue[l] = input[l].value(points[i]);
     field[i] = flat.forward(c.ops, s);
     if (std::abs(field[i]) > options.nearDistance * tolerance) return;
     flat.backward(s);
-    for (std::size_t l = 0; l < input.size(); ++l)
-      if (std::abs(s.leafAdjoint[l]) > 1e-9) active[i].push_back(int(l));
+    const Vec3 n = scan.hasNormals() ? scan.normals[i] : Vec3::Zero();
+    for (std::size_t l = 0; l < input.size(); ++l) {
+      if (std::abs(s.leafAdjoint[l]) <= 1e-9) continue;
+      active[i].push_back(int(l));
+      // The leaf's value is read on its face from here on.
+      faces[i].push_back(faceOf(input[l], points[i], s.leafAdjoint[l] < 0.0 ? Vec3(-n) : n,
+                                nearBand, c.lengthStep));
+    }
+    if (active[i].empty() || !scan.hasNormals()) return;
+    // The point must lie on its main leaf's face, its normal within nearAngle
+    // of the face's (a point just inside an edge, which the field reads on
+    // the other face, still counts on its own).
+    std::size_t main = 0;
+    for (std::size_t a = 1; a < active[i].size(); ++a)
+      if (std::abs(s.leafAdjoint[std::size_t(active[i][a])]) >
+          std::abs(s.leafAdjoint[std::size_t(active[i][main])]))
+        main = a;
+    const std::size_t l = std::size_t(active[i][main]);
+    const double side = s.leafAdjoint[l] < 0.0 ? -1.0 : 1.0;
+    if (side * faceNormal(input[l], faces[i][main], points[i], c.lengthStep).dot(n) < cosLimit) {
+      active[i].clear();
+      faces[i].clear();
+    }
   });
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < points.size(); ++i)
@@ -392,8 +523,8 @@ TreeFitResult fitTreeParameters(std::span<const Vec3> points, double diagonal,
           pointBlocks.push_back(b);
     std::vector<double*> data;
     for (const std::size_t b : pointBlocks) data.push_back(values.data() + blocks[b].offset);
-    problem.AddResidualBlock(new PointResidual(c, points[i], active[i], std::move(pointBlocks)),
-                             &loss, data);
+    problem.AddResidualBlock(
+        new PointResidual(c, points[i], active[i], faces[i], std::move(pointBlocks)), &loss, data);
   }
   for (const ParameterBlock& b : blocks) {
     double* data = values.data() + b.offset;
@@ -404,6 +535,14 @@ TreeFitResult fitTreeParameters(std::span<const Vec3> points, double diagonal,
       out.parameters += std::size_t(b.size);
       if (b.kind == ParameterBlock::Kind::Radius)
         problem.SetParameterLowerBound(data, 0, options.parameters.lengthTolerance * diagonal);
+      if (options.priorWeight > 0.0) {
+        // A turn moving the far end of the part by εd weighs as a shift by εd.
+        const double sigma =
+            b.kind == ParameterBlock::Kind::Rotation ? 2.0 * options.distanceTolerance : tolerance;
+        problem.AddResidualBlock(new PriorResidual(parameters.values().data() + b.offset, b.size,
+                                                   sigma, std::sqrt(options.priorWeight)),
+                                 nullptr, data);
+      }
     }
   }
 

@@ -174,9 +174,11 @@ struct TreeParameters::Data {
       const int k = m.cls[0] = classOf(h->normal, m.sign[0]);
       m.rotation = local(rotationBlock(k));
       // normal·x = offset, normal = sign·d: d·(x − pivot) = sign·offset − d·pivot.
-      m.offset = local(offsetBlock(k, m.sign[0] * h->offset - classes[std::size_t(k)].d.dot(pivot)));
+      m.offset =
+          local(offsetBlock(k, m.sign[0] * h->offset - classes[std::size_t(k)].d.dot(pivot)));
     } else if (const auto* b = p.as<Box>()) {
-      for (int i = 0; i < 3; ++i) m.cls[std::size_t(i)] = classOf(b->axes.col(i), m.sign[std::size_t(i)]);
+      for (int i = 0; i < 3; ++i)
+        m.cls[std::size_t(i)] = classOf(b->axes.col(i), m.sign[std::size_t(i)]);
       m.rotation = local(rotationBlock(m.cls[0]));
       for (std::size_t i = 0; i < 3; ++i) {
         const double mid = along(m.cls[i], b->center);
@@ -228,7 +230,8 @@ TreeParameters::TreeParameters(const CsgTree& tree, double scale, const Vec3& pi
   d.angleTolerance = options.angleTolerance;
   d.rotate = options.rotate;
   for (const Node* leaf : tree.leaves())
-    if (std::find(d.leaves.begin(), d.leaves.end(), leaf) == d.leaves.end()) d.leaves.push_back(leaf);
+    if (std::find(d.leaves.begin(), d.leaves.end(), leaf) == d.leaves.end())
+      d.leaves.push_back(leaf);
 
   // Direction classes, then frames: classes that are orthogonal or axes of
   // one box turn together.
@@ -241,7 +244,9 @@ TreeParameters::TreeParameters(const CsgTree& tree, double scale, const Vec3& pi
   }
   std::vector<int> parent(d.classes.size());
   std::iota(parent.begin(), parent.end(), 0);
-  const auto join = [&](int a, int b) { parent[std::size_t(findRoot(parent, a))] = findRoot(parent, b); };
+  const auto join = [&](int a, int b) {
+    parent[std::size_t(findRoot(parent, a))] = findRoot(parent, b);
+  };
   for (std::size_t a = 0; a < d.classes.size(); ++a)
     for (std::size_t b = a + 1; b < d.classes.size(); ++b)
       if (std::abs(d.classes[a].d.dot(d.classes[b].d)) <= d.angleTolerance) join(int(a), int(b));
@@ -339,14 +344,14 @@ bool TreeParameters::leafPrimitive(std::size_t leaf, const double* const* block,
   return false;
 }
 
-bool TreeParameters::primitives(std::span<const double> values,
-                                std::vector<Primitive>& out) const {
+bool TreeParameters::primitives(std::span<const double> values, std::vector<Primitive>& out) const {
   const Data& d = *data_;
   out.resize(d.leaves.size());
   std::vector<const double*> block;
   for (std::size_t l = 0; l < d.leaves.size(); ++l) {
     block.clear();
-    for (const std::size_t b : d.models[l].blocks) block.push_back(values.data() + d.blocks[b].offset);
+    for (const std::size_t b : d.models[l].blocks)
+      block.push_back(values.data() + d.blocks[b].offset);
     if (!leafPrimitive(l, block.data(), out[l])) return false;
   }
   return true;
@@ -354,7 +359,8 @@ bool TreeParameters::primitives(std::span<const double> values,
 
 namespace {
 
-NodePtr rebuilt(const NodePtr& node, const std::unordered_map<const Node*, const Primitive*>& leafOf,
+NodePtr rebuilt(const NodePtr& node,
+                const std::unordered_map<const Node*, const Primitive*>& leafOf,
                 std::unordered_map<const Node*, NodePtr>& done) {
   if (const auto it = done.find(node.get()); it != done.end()) return it->second;
   NodePtr out;
