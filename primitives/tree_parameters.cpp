@@ -37,7 +37,7 @@ struct LeafModel {
 struct DirectionClass {
   Vec3 d, u, v;
   int frame = -1;
-  std::vector<std::pair<double, std::size_t>> offsets;
+  std::vector<std::pair<double, std::size_t>> offsets[3];  // by side: inward, none, outward
   std::vector<std::pair<Eigen::Vector2d, std::size_t>> lines;
 };
 
@@ -121,8 +121,12 @@ struct TreeParameters::Data {
     return b;
   }
 
-  std::size_t offsetBlock(int k, double value) {
-    return shared(classes[std::size_t(k)].offsets, Kind::Offset, value);
+  // `side`: +1 when the face's outward normal in the solid is +d, -1 when
+  // it is -d, 0 for a torus centre. Faces share an offset only when they
+  // face the same way: a cutter's cap exactly on the face it cuts through
+  // would leave a surface of zero thickness.
+  std::size_t offsetBlock(int k, double value, int side) {
+    return shared(classes[std::size_t(k)].offsets[side + 1], Kind::Offset, value);
   }
   std::size_t radiusBlock(double value) { return shared(radii, Kind::Radius, value); }
 
@@ -161,7 +165,7 @@ struct TreeParameters::Data {
     return classes[std::size_t(k)].d.dot(point - pivot);
   }
 
-  LeafModel model(const Primitive& p) {
+  LeafModel model(const Primitive& p, int polarity) {
     LeafModel m;
     m.type = p.type();
     const auto local = [&m](std::size_t block) {
@@ -174,32 +178,32 @@ struct TreeParameters::Data {
       const int k = m.cls[0] = classOf(h->normal, m.sign[0]);
       m.rotation = local(rotationBlock(k));
       // normal·x = offset, normal = sign·d: d·(x − pivot) = sign·offset − d·pivot.
-      m.offset =
-          local(offsetBlock(k, m.sign[0] * h->offset - classes[std::size_t(k)].d.dot(pivot)));
+      m.offset = local(offsetBlock(k, m.sign[0] * h->offset - classes[std::size_t(k)].d.dot(pivot),
+                                   polarity * int(m.sign[0])));
     } else if (const auto* b = p.as<Box>()) {
       for (int i = 0; i < 3; ++i)
         m.cls[std::size_t(i)] = classOf(b->axes.col(i), m.sign[std::size_t(i)]);
       m.rotation = local(rotationBlock(m.cls[0]));
       for (std::size_t i = 0; i < 3; ++i) {
         const double mid = along(m.cls[i], b->center);
-        m.face[i][0] = local(offsetBlock(m.cls[i], mid - b->halfSize[int(i)]));
-        m.face[i][1] = local(offsetBlock(m.cls[i], mid + b->halfSize[int(i)]));
+        m.face[i][0] = local(offsetBlock(m.cls[i], mid - b->halfSize[int(i)], -polarity));
+        m.face[i][1] = local(offsetBlock(m.cls[i], mid + b->halfSize[int(i)], polarity));
       }
     } else if (const auto* c = p.as<Cylinder>()) {
       const int k = m.cls[0] = classOf(c->axis, m.sign[0]);
       m.rotation = local(rotationBlock(k));
       m.line = local(lineBlock(k, c->center));
       const double mid = along(k, c->center);
-      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * c->height));
-      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * c->height));
+      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * c->height, -polarity));
+      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * c->height, polarity));
       m.radius[0] = local(radiusBlock(c->radius));
     } else if (const auto* c = p.as<Cone>()) {
       const int k = m.cls[0] = classOf(c->axis, m.sign[0]);
       m.rotation = local(rotationBlock(k));
       m.line = local(lineBlock(k, c->center));
       const double mid = along(k, c->center);
-      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * c->height));
-      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * c->height));
+      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * c->height, -polarity));
+      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * c->height, polarity));
       m.radius[0] = local(radiusBlock(c->radiusBottom));
       m.radius[1] = local(radiusBlock(c->radiusTop));
     } else if (const auto* s = p.as<Sphere>()) {
@@ -209,7 +213,7 @@ struct TreeParameters::Data {
       const int k = m.cls[0] = classOf(t->axis, m.sign[0]);
       m.rotation = local(rotationBlock(k));
       m.line = local(lineBlock(k, t->center));
-      m.offset = local(offsetBlock(k, along(k, t->center)));
+      m.offset = local(offsetBlock(k, along(k, t->center), 0));
       m.radius[0] = local(radiusBlock(t->majorRadius));
       m.radius[1] = local(radiusBlock(t->minorRadius));
     }
@@ -257,7 +261,22 @@ TreeParameters::TreeParameters(const CsgTree& tree, double scale, const Vec3& pi
   for (std::size_t k = 0; k < d.classes.size(); ++k) d.classes[k].frame = findRoot(parent, int(k));
   d.frameRotation.assign(d.classes.size(), -1);
 
-  for (const Node* leaf : d.leaves) d.models.push_back(d.model(leaf->primitive));
+  // Each leaf's polarity: -1 when it enters the solid complemented (a
+  // cutter), as first met depth first.
+  std::unordered_map<const Node*, int> polarity;
+  const auto walk = [&polarity](const auto& self, const Node& node, int sign) -> void {
+    if (node.kind == NodeKind::Primitive) {
+      polarity.emplace(&node, sign);
+      return;
+    }
+    for (std::size_t c = 0; c < node.children.size(); ++c) {
+      const bool flips =
+          node.kind == NodeKind::Complement || (node.kind == NodeKind::Difference && c > 0);
+      self(self, *node.children[c], flips ? -sign : sign);
+    }
+  };
+  walk(walk, *tree.root(), 1);
+  for (const Node* leaf : d.leaves) d.models.push_back(d.model(leaf->primitive, polarity.at(leaf)));
   for (const LeafModel& m : d.models)
     for (const std::size_t b : m.blocks) ++d.blocks[b].users;
 }

@@ -9,7 +9,10 @@
 ///    parallel and orthogonal stays orthogonal;
 ///  * along a class, every face (a half-space's plane, a box's two faces, a
 ///    cylinder's or cone's two caps, a torus' centre) is a plane offset; faces
-///    at one offset share it (coplanar faces stay coplanar);
+///    at one offset that face the same way in the solid share it (coplanar
+///    faces stay coplanar; a cutter's cap on the face it cuts through is not
+///    made to coincide with it exactly, which would leave a zero-thickness
+///    surface);
 ///  * axes of one class through one line share that line (coaxial);
 ///  * equal radii (cylinder, cone, sphere and torus radii) share one radius;
 ///    equal sphere centres share one centre.

@@ -54,7 +54,9 @@ TEST(TreeParameters, SharesTheRelationsAndRebuildsTheTree) {
   const TreeParameters p(tree, 50.0, Vec3(1, 2, 3));
   ASSERT_EQ(p.leafCount(), 4u);
   // One frame (one rotation) for the boxes and the axes; the boss and the
-  // hole share their axis line; the boss' bottom is the plate's top.
+  // hole share their axis line. The boss' bottom lies on the plate's top
+  // but faces the other way: not shared (two coincident faces of opposite
+  // sides would make a surface of zero thickness).
   std::size_t rotations = 0, lines = 0;
   for (const ParameterBlock& b : p.blocks()) {
     rotations += b.kind == ParameterBlock::Kind::Rotation;
@@ -62,7 +64,14 @@ TEST(TreeParameters, SharesTheRelationsAndRebuildsTheTree) {
   }
   EXPECT_EQ(rotations, 1u);
   EXPECT_EQ(lines, 1u);
-  EXPECT_EQ(p.sharedBlocks(), 3u);
+  EXPECT_EQ(p.sharedBlocks(), 2u);
+  // Two boxes side by side: their tops, bottoms, fronts and backs are
+  // coplanar and face the same way (4 shared offsets, and the rotation);
+  // the faces where they touch face each other (not shared).
+  const CsgTree pair = CsgTree::unite(
+      {CsgTree::leaf(Box{Vec3(5, 5, 2.5), Mat3::Identity(), Vec3(5, 5, 2.5)}),
+       CsgTree::leaf(Box{Vec3(15, 5, 2.5), Mat3::Identity(), Vec3(5, 5, 2.5)})});
+  EXPECT_EQ(TreeParameters(pair, 30.0, Vec3::Zero()).sharedBlocks(), 5u);
   std::vector<Primitive> rebuilt;
   ASSERT_TRUE(p.primitives(p.values(), rebuilt));
   const CsgTree again = p.tree(rebuilt);
