@@ -277,9 +277,10 @@ double fieldAt(const FitContext& c, const Vec3& p, std::span<const int> active,
 class PointResidual final : public ceres::CostFunction {
  public:
   PointResidual(const FitContext& context, const Vec3& point, std::vector<int> active,
-                std::vector<int> faces, std::vector<std::size_t> blocks)
+                std::vector<int> faces, std::vector<std::size_t> blocks, double side)
       : c_(context),
         p_(point),
+        side_(side),
         active_(std::move(active)),
         faces_(std::move(faces)),
         blocks_(std::move(blocks)) {
@@ -310,18 +311,20 @@ class PointResidual final : public ceres::CostFunction {
       for (std::size_t k = 0; k < where_[a].size(); ++k) ptr[k] = parameters[where_[a][k]];
       if (!c_.parameters->leafPrimitive(std::size_t(active_[a]), ptr.data(), own[a])) return false;
     }
-    const double f = fieldAt(c_, p_, active_, faces_, own, s);
+    const double f = side_ != 0.0 ? side_ * faceValue(own[0], faces_[0], p_)
+                                  : fieldAt(c_, p_, active_, faces_, own, s);
     residuals[0] = f * c_.invTolerance;
     if (jacobians == nullptr) return true;
     for (std::size_t r = 0; r < blocks_.size(); ++r) {
       if (jacobians[r] == nullptr) continue;
       std::fill(jacobians[r], jacobians[r] + c_.parameters->blocks()[blocks_[r]].size, 0.0);
     }
-    c_.flat->backward(s);
+    if (side_ == 0.0) c_.flat->backward(s);
     // Central differences of each active leaf's distance in its parameters.
     std::array<double, 32> buffer{};
     for (std::size_t a = 0; a < active_.size(); ++a) {
-      const double adjoint = s.leafAdjoint[std::size_t(active_[a])] * c_.invTolerance;
+      const double adjoint =
+          (side_ != 0.0 ? side_ : s.leafAdjoint[std::size_t(active_[a])]) * c_.invTolerance;
       if (adjoint == 0.0) continue;
       const std::span<const std::size_t> leafBlocks =
           c_.parameters->leafBlocks(std::size_t(active_[a]));
@@ -368,6 +371,7 @@ class PointResidual final : public ceres::CostFunction {
  private:
   const FitContext& c_;
   Vec3 p_;
+  double side_;  // ±1: the residual is the first active leaf's face value times this
   std::vector<int> active_;
   std::vector<int> faces_;
   std::vector<std::size_t> blocks_;
@@ -461,6 +465,26 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
   // The points near the surface and the leaves the field depends on there.
   std::vector<double> field(points.size());
   std::vector<std::vector<int>> active(points.size()), faces(points.size());
+  std::vector<double> side(points.size(), 0.0);
+  // Each leaf's polarity: -1 when it enters the solid complemented.
+  std::vector<double> polarity(input.size(), 1.0);
+  {
+    std::unordered_map<const Node*, double> sign;
+    const auto walk = [&sign](const auto& self, const Node& node, double value) -> void {
+      if (node.kind == NodeKind::Primitive) {
+        sign.emplace(&node, value);
+        return;
+      }
+      for (std::size_t k = 0; k < node.children.size(); ++k) {
+        const bool flips =
+            node.kind == NodeKind::Complement || (node.kind == NodeKind::Difference && k > 0);
+        self(self, *node.children[k], flips ? -value : value);
+      }
+    };
+    walk(walk, *tree.root(), 1.0);
+    for (std::size_t l = 0; l < input.size(); ++l) polarity[l] = sign.at(parameters.leaves()[l]);
+  }
+  const double exposed = 0.05 * tolerance;  // a face's foot this near the surface is on it
   const double nearBand = options.nearDistance * tolerance;
   const double cosLimit = std::cos(options.nearAngle * std::numbers::pi / 180.0);
   tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
@@ -478,6 +502,31 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
                                 nearBand, c.lengthStep));
     }
     if (active[i].empty() || !scan.hasNormals()) return;
+    if (!options.throughField) {
+      // The exposed face the point was scanned on: within the band, its
+      // normal (as the solid sees it) closest to the point's, and the tree's
+      // surface at the point's foot on it.
+      active[i].clear();
+      faces[i].clear();
+      double best = cosLimit;
+      for (std::size_t l = 0; l < input.size(); ++l) {
+        for (int k = 0; k < faceCount(input[l]); ++k) {
+          const double v = faceValue(input[l], k, points[i]);
+          if (std::abs(v) > nearBand) continue;
+          const Vec3 out = faceNormal(input[l], k, points[i], c.lengthStep);
+          const double agree = polarity[l] * out.dot(n);
+          if (agree <= best) continue;
+          const Vec3 foot = points[i] + v * out;
+          for (std::size_t m = 0; m < input.size(); ++m) s.leafValue[m] = input[m].value(foot);
+          if (std::abs(flat.forward(c.ops, s)) > exposed) continue;
+          best = agree;
+          active[i] = {int(l)};
+          faces[i] = {k};
+          side[i] = polarity[l];
+        }
+      }
+      return;
+    }
     // The point must lie on its main leaf's face, its normal within nearAngle
     // of the face's (a point just inside an edge, which the field reads on
     // the other face, still counts on its own).
@@ -524,7 +573,8 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
     std::vector<double*> data;
     for (const std::size_t b : pointBlocks) data.push_back(values.data() + blocks[b].offset);
     problem.AddResidualBlock(
-        new PointResidual(c, points[i], active[i], faces[i], std::move(pointBlocks)), &loss, data);
+        new PointResidual(c, points[i], active[i], faces[i], std::move(pointBlocks), side[i]),
+        &loss, data);
   }
   for (const ParameterBlock& b : blocks) {
     double* data = values.data() + b.offset;

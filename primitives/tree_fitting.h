@@ -1,22 +1,26 @@
 #pragma once
 /// Least-squares refinement of every primitive parameter of a CSG tree on
-/// scan points, through the tree's field: each point near the tree's surface
-/// contributes the field value there (a signed distance, in units of εd)
-/// under a robust loss, and the parameters move as shared blocks
+/// scan points, with the parameters moving as shared blocks
 /// (primitives/tree_parameters.h), so parallel and orthogonal directions,
-/// coplanar faces, coaxial axes and equal radii stay exactly so.
+/// same-facing coplanar faces, coaxial axes and equal radii stay exactly so.
 ///
-/// Each point is tied to the face of its leaf it was scanned on (the face
-/// whose normal agrees with the point's): that leaf's value at the point is
-/// the signed distance to the face's whole surface (plane, infinite cylinder
-/// or cone), so a noisy point just inside an edge is not read on the other
-/// face, which would push every face outwards. The field is min/max by
-/// default: SARDF's arcs read a point inside (or outside) both operands near
-/// an edge as deeper than it is (up to 17-23 %, core/sardf.h), which on the
-/// bundled noisy scans moved faces and lowered the IoU against the true part
-/// more than min/max did. Derivatives of a leaf's value with respect to its
-/// parameters are central differences; those of the tree with respect to
-/// its leaves are exact (chain rule through the operations).
+/// The tree's field decides which points drive the fit and what they pull
+/// on: a point within nearDistance of the tree's surface is tied to the
+/// exposed face it was scanned on — a face of a leaf (a box face, a
+/// cylinder's or cone's lateral surface or cap, a plane, a sphere, a torus)
+/// within the band, whose normal as the solid sees it (flipped for a cutter)
+/// agrees best with the point's normal (within nearAngle), and on which the
+/// tree's field vanishes at the point's foot. Its residual is its signed
+/// distance to that face's whole surface (plane, infinite cylinder or cone),
+/// in units of εd, under a Huber loss. This is the tree's field wherever
+/// the point lies in its face's region; it differs near edges and across
+/// thin walls, where the field (min/max or SARDF) reads a noisy point on the
+/// other face: fitting the field itself (throughField) dropped or misread
+/// those points and moved faces outwards on noisy scans (a 1 mm tray's walls
+/// grew 13 %). `operations` is the field of that selection; min/max by
+/// default (SARDF's arcs read points near edges deeper than they are, up to
+/// 17–23 %, core/sardf.h). Derivatives of a face's distance with respect to
+/// its parameters are central differences.
 
 #include <cstddef>
 #include <cstdint>
@@ -39,6 +43,9 @@ struct TreeFitOptions {
   double lossScale = 1.0;                     ///< Huber scale of the residuals, in εd
   double nearDistance = 3.0;  ///< only points this close to the tree's surface drive the fit, in εd
   double nearAngle = 30.0;    ///< ... and whose normal is this close to the tree's there, degrees
+  bool throughField = false;  ///< residual: the tree's field with each leaf read on the point's
+                              ///< face (true), or the signed distance to the exposed face of the
+                              ///< tree the point was scanned on (false; see above)
   double priorWeight = 1.0;   ///< each parameter block is held to its start as strongly as this
                               ///< many points would hold it (so what no point sees stays put)
   int maxIterations = 25;     ///< Levenberg-Marquardt iterations at most (count)
