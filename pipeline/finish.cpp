@@ -48,7 +48,10 @@ FinishResult finishTree(const PointCloud& scan, const CsgTree& tree, const Voxel
   if (out.ran) {
     out.after = fitnessOf(scan, out.fit.tree, options.fitness, voxels);
     if (voxels) out.voxelIouAfter = voxelIou(out.fit.tree, *voxels);
-    out.accepted = out.after.total >= out.before.total && out.voxelIouAfter >= out.voxelIouBefore;
+    // A fit that moves nothing by more than 1e-6·D only rounds the input:
+    // the input is kept as it is.
+    out.accepted = out.fit.primitivesChanged > 0 && out.after.total >= out.before.total &&
+                   out.voxelIouAfter >= out.voxelIouBefore;
   }
   if (out.accepted) {
     out.tree = out.fit.tree;

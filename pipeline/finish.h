@@ -43,8 +43,9 @@ struct FinishResult {
 };
 
 /// Refines the parameters of `tree` on an oriented scan and keeps them when
-/// options.fitness does not drop and the voxel IoU against `voxels`' labels
-/// does not drop (without `voxels`, the fitness alone decides).
+/// some primitive moved by more than 1e-6·D, options.fitness does not drop
+/// and the voxel IoU against `voxels`' labels does not drop (without
+/// `voxels`, the fitness alone decides).
 /// @throw std::invalid_argument when the scan has no normals or the tree is empty.
 FinishResult finishTree(const PointCloud& scan, const CsgTree& tree, const VoxelTarget* voxels,
                         const FinishOptions& options = {});

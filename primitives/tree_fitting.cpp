@@ -624,8 +624,7 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
   out.tree = parameters.tree(fitted);
   out.rmsAfter = rmsField(c, used, fitted);
   for (std::size_t l = 0; l < fitted.size(); ++l)
-    if (!fitted[l].approxEqual(input[l], options.parameters.lengthTolerance * diagonal))
-      ++out.primitivesChanged;
+    if (!fitted[l].approxEqual(input[l], 1e-6 * diagonal)) ++out.primitivesChanged;
   return out;
 }
 

@@ -61,7 +61,7 @@ struct TreeFitResult {
   double rmsAfter = 0.0;         ///< the same on the fitted tree
   std::size_t parameters = 0;    ///< free parameters after sharing
   std::size_t sharedBlocks = 0;  ///< parameter blocks several leaves share (relations kept)
-  std::size_t primitivesChanged = 0;  ///< distinct leaves whose primitive moved
+  std::size_t primitivesChanged = 0;  ///< distinct leaves with a parameter moved by > 1e-6·D
   int iterations = 0;                 ///< solver iterations
   bool converged = false;             ///< the solver met its tolerances
 };

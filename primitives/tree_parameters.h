@@ -17,7 +17,10 @@
 ///  * equal radii (cylinder, cone, sphere and torus radii) share one radius;
 ///    equal sphere centres share one centre.
 /// Values are compared within a tolerance meant to catch relations that are
-/// exact up to rounding, not near-coincidences.
+/// exact up to rounding, not near-coincidences: snapping faces a few
+/// micrometres apart onto one plane made a fillet ring's hidden bottom
+/// coincide exactly with the face it stands on, a zero-thickness surface that
+/// surface sampling and OpenCASCADE both stumble on.
 
 #include <cstddef>
 #include <memory>
@@ -30,7 +33,7 @@ namespace csgvox {
 
 /// Options of TreeParameters.
 struct TreeParameterOptions {
-  double lengthTolerance = 1e-6;  ///< offsets, lines and radii this close are one parameter,
+  double lengthTolerance = 1e-9;  ///< offsets, lines and radii this close are one parameter,
                                   ///< fraction of the tree's scale (see TreeParameters)
   double angleTolerance = 1e-6;   ///< directions this close to parallel (orthogonal) are one
                                   ///< class (one frame), radians
