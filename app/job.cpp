@@ -76,6 +76,9 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
                  "hybrid: a point whose normal is further than this from the tree's, in degrees, "
                  "is badly explained (so is one farther than 1% of the diagonal)")
       ->check(inRange(0.1, 180.0));
+  app.add_flag("!--no-finish", s.pipeline.finish.enabled,
+               "hybrid: skip the finish (the Ceres fit of every primitive parameter of the final "
+               "tree on the points, relations kept exact)");
   app.add_flag("!--no-preview", s.preview, "Do not write preview.png");
   GpOptions& gp = s.pipeline.gp;
   app.add_option("--population", gp.evolve.population, "gp: creatures per generation")
@@ -251,6 +254,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
       parameters["bad_angle_deg"] = h.badAngle;
       parameters["refine_operations"] = settings.refineOperations;
       parameters["refine_voxel_weight"] = h.fitness.voxelWeight;
+      parameters["finish"] = po.finish.enabled;
     }
   } else {
     const GpOptions& gp = po.gp;
@@ -314,6 +318,23 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                               {"boundary_area", h.area},
                               {"unsupported_area_before", h.unsupportedBefore},
                               {"unsupported_area_after", h.unsupportedAfter}};
+      if (po.finish.enabled) {
+        const FinishResult& f = rec.finish;
+        report["finish"] = {{"ran", f.ran},
+                            {"accepted", f.accepted},
+                            {"points", f.fit.points},
+                            {"parameters", f.fit.parameters},
+                            {"shared_blocks", f.fit.sharedBlocks},
+                            {"iterations", f.fit.iterations},
+                            {"residual_rms_before", f.fit.rmsBefore},
+                            {"residual_rms_after", f.fit.rmsAfter},
+                            {"fitness_before", f.before.total},
+                            {"fitness_after", f.after.total},
+                            {"voxel_iou_before", f.voxelIouBefore},
+                            {"voxel_iou_after", f.voxelIouAfter},
+                            {"primitives_changed", f.primitivesChanged},
+                            {"seconds", f.seconds}};
+      }
     }
   } else {
     const EvolveResult& s = rec.gp.search;

@@ -178,6 +178,19 @@ void hybridMethod(Reconstruction& out, const PointCloud& scan, const Reconstruct
                 h.primitivesBefore, h.primitivesAfter);
   clock.finish(summary);
   out.tree = h.tree;
+  if (options.finish.enabled && Clock::now() < deadline) {
+    clock.start("finish");
+    FinishOptions fo = options.finish;
+    fo.fitness = ho.fitness;
+    const VoxelTarget target{out.grid, out.labels.inside};
+    out.finish = finishTree(scan, out.tree, &target, fo);
+    const FinishResult& f = out.finish;
+    std::snprintf(summary, sizeof(summary), "residual RMS %.4g -> %.4g, fitness %.6g -> %.6g, %s",
+                  f.fit.rmsBefore, f.fit.rmsAfter, f.before.total, f.after.total,
+                  f.accepted ? "accepted" : "input kept");
+    clock.finish(summary);
+    out.tree = f.tree;
+  }
   out.voxels = solidVoxels(out.tree, out.grid);
 }
 

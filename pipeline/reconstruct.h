@@ -17,6 +17,7 @@
 #include "core/progress.h"
 #include "optimize/csg_construction.h"
 #include "pipeline/detect_and_fit.h"
+#include "pipeline/finish.h"
 #include "pipeline/gp_method.h"
 #include "pipeline/hybrid_method.h"
 #include "primitives/hypotheses.h"
@@ -51,6 +52,8 @@ struct ReconstructOptions {
   LabelOptions labels;             ///< voxel labelling
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
   HybridOptions hybrid;        ///< hybrid method: the refinement (its seed is set from `seed`)
+  FinishOptions finish;        ///< hybrid method: the parameter fit last (its fitness is set from
+                               ///< hybrid.fitness)
   GpOptions gp;                ///< gp method: the search (its seed and time limit are set from
                                ///< `seed` and `timeLimit`)
   /// Wall-clock seconds for the whole call (0: none). Detection past the
@@ -94,6 +97,7 @@ struct Reconstruction {
   Construction construction;       ///< voxel method: the optimisations' result
   GpResult gp;                     ///< gp method: the search's result
   HybridResult hybrid;             ///< hybrid method: what the refinement changed
+  FinishResult finish;             ///< hybrid method: what the parameter fit did
   CsgTree voxelTree;               ///< hybrid method: the voxel stage's tree it refined
   VoxelSet voxels;                 ///< voxels whose centre `tree` holds
   std::vector<StageTime> timings;  ///< in pipeline order
