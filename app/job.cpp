@@ -76,9 +76,9 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
                  "hybrid: a point whose normal is further than this from the tree's, in degrees, "
                  "is badly explained (so is one farther than 1% of the diagonal)")
       ->check(inRange(0.1, 180.0));
-  app.add_flag("!--no-finish", s.pipeline.finish.enabled,
-               "hybrid: skip the finish (the Ceres fit of every primitive parameter of the final "
-               "tree on the points, relations kept exact)");
+  app.add_flag("--finish,!--no-finish", s.pipeline.finish.enabled,
+               "hybrid: end with the finish (the Ceres fit of every primitive parameter of the "
+               "final tree on the points, relations kept exact); off by default");
   app.add_flag("!--no-preview", s.preview, "Do not write preview.png");
   GpOptions& gp = s.pipeline.gp;
   app.add_option("--population", gp.evolve.population, "gp: creatures per generation")

@@ -187,6 +187,7 @@ TEST(Finish, NeverLowersTheIouAgainstTheTruthOnBundledParts) {
     for (const char* file : {"scan.ply", "scan_noisy.ply"}) {
       const Scan scan = readScan(test::dataDir() / part / file);
       ReconstructOptions with, without;
+      with.finish.enabled = true;
       without.finish.enabled = false;
       const Reconstruction a = reconstruct(scan.cloud, with);
       const Reconstruction b = reconstruct(scan.cloud, without);
@@ -212,7 +213,7 @@ class FinishCli : public ::testing::Test {
 TEST_F(FinishCli, ReportsTheFinishAndNoFinishSkipsIt) {
   const std::string scan = (test::dataDir() / "plate_holes" / "scan.ply").string();
   const fs::path on = dir_ / "on", off = dir_ / "off";
-  ASSERT_EQ(run("'" + scan + "' -o '" + on.string() + "' -q --no-preview", dir_).code, 0);
+  ASSERT_EQ(run("'" + scan + "' -o '" + on.string() + "' -q --no-preview --finish", dir_).code, 0);
   ASSERT_EQ(run("'" + scan + "' -o '" + off.string() + "' -q --no-preview --no-finish", dir_).code,
             0);
   const auto a = nlohmann::json::parse(slurp(on / "report.json"));
