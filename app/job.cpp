@@ -301,7 +301,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                            {"fitness_after", r.localAfter},
                            {"primitives_before", r.primitivesBefore},
                            {"primitives_after", r.primitivesAfter},
-                           {"replaced", r.replaced},
+                           {"replaced", r.replaced()},
                            {"verdict", regionVerdictName(r.verdict)},
                            {"unsupported_area", r.unsupported},
                            {"seconds", r.seconds}});

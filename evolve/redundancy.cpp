@@ -1,5 +1,7 @@
 #include "evolve/redundancy.h"
 
+#include <algorithm>
+
 #include "evolve/tree_variation.h"
 
 namespace csgvox {
@@ -39,19 +41,16 @@ NodePtr normalizeNode(const NodePtr& node) {
       if (node->kind == NodeKind::Difference && k == 0) return nullptr;
       continue;
     }
-    const bool first = node->kind == NodeKind::Difference && k == 0;
-    bool repeated = false;
-    for (std::size_t j = first ? children.size() : 0; j < children.size() && !repeated; ++j) {
-      if (node->kind == NodeKind::Difference && j == 0) continue;
-      repeated = sameSubtree(children[j], n);
-    }
-    if (repeated) {
-      changed = true;
+    // A difference's cutters are compared among themselves and with what
+    // they cut; the operands of a union or an intersection with each other.
+    const bool cut = node->kind == NodeKind::Difference;
+    const auto same = [&](const NodePtr& other) { return sameSubtree(other, n); };
+    if (std::any_of(children.begin() + std::ptrdiff_t(cut && !children.empty()), children.end(),
+                    same)) {
+      changed = true;  // repeated
       continue;
     }
-    if (node->kind == NodeKind::Difference && !first && sameSubtree(children.front(), n)) {
-      return nullptr;  // X − X
-    }
+    if (cut && k > 0 && same(children.front())) return nullptr;  // X − X
     if (node->kind == NodeKind::Intersection) {
       for (const NodePtr& other : children)
         if (isComplementOf(other, n) || isComplementOf(n, other)) return nullptr;

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -338,14 +337,15 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   const FitnessModel model(scan.points, scan.normals, diagonal, library, options.fitness,
                            options.fitness.voxelWeight > 0.0 ? &target : nullptr);
   out.before = model.evaluate(library.adopt(tree));
-  // A replacement is judged by the fitness less the credit of the points
-  // explained only by ghost surfaces (a distance and a normal term each),
-  // then less the credit of the points the boundary it adds where the scan
-  // has none would hold; the support is measured only when a replacement is
-  // about to be accepted (a tree that cannot be sampled supports nothing).
+  // A replacement is judged by the fitness less the credit (a distance and a
+  // normal term) of the points explained only by ghost surfaces, then less
+  // that of the points the boundary it adds where the scan has none would
+  // hold at the scan's density (measured on the input tree only once a
+  // replacement is weighed; a tree that cannot be sampled supports nothing).
   const double tolerance = options.fitness.distanceTolerance * diagonal;
+  const double gain = options.minGain * double(scan.size());
   out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
-  double best = out.before.total - 2.0 * double(out.ghostBefore);
+  double best = out.before.total - 2.0 * double(out.ghostBefore);  // less its ghosts' credit
   std::optional<NearestNeighbors> nearest;
   SupportOptions so;
   so.distance = options.supportDistance * tolerance;
@@ -360,52 +360,38 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     }
   };
   std::optional<SurfaceSupport> bestSupport;
-  const double gain = options.minGain * double(scan.size());
-  for (std::size_t k = 0; k < found.size(); ++k) {
+  const auto judge = [&](std::size_t k) {
     HybridRegion& h = found[k].report;
-    h.verdict = RegionVerdict::NotImproved;
-    if (h.localAfter > h.localBefore) {
-      const CsgTree trial = assemble(std::ptrdiff_t(k));
-      const Fitness f = model.evaluate(library.adopt(trial));
-      // Ghosts only lower the score: counted once the plain fitness gains.
-      const std::size_t ghosts =
-          f.total > best + gain ? ghostPoints(scan, trial, ops, tolerance) : 0;
-      if (!(f.total > best + gain)) {
-        h.verdict = RegionVerdict::NoGain;
-      } else if (!(f.total - 2.0 * double(ghosts) > best + gain)) {
-        h.verdict = RegionVerdict::Ghost;
-      } else {
-        if (!bestSupport) {
-          bestSupport = support(tree);
-          if (bestSupport) {
-            out.area = bestSupport->area;
-            out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
-          }
-        }
-        const std::optional<SurfaceSupport> s = support(trial);
-        if (s) h.unsupported = s->unsupported;
-        // Boundary the scan does not support counts as the points it would
-        // hold at the scan's density, each losing its distance and normal
-        // credit.
-        const double density = bestSupport ? double(scan.size()) / bestSupport->area : 0.0;
-        const double score = s ? f.total - 2.0 * double(ghosts) -
-                                     2.0 * density * (s->unsupported - bestSupport->unsupported)
-                               : -std::numeric_limits<double>::infinity();
-        if (bestSupport && s && score > best + gain) {
-          best = f.total - 2.0 * double(ghosts);
-          bestSupport = SurfaceSupport{bestSupport->area, s->unsupported};
-          out.unsupportedAfter = s->unsupported;
-          out.ghostAfter = ghosts;
-          h.verdict = RegionVerdict::Replaced;
-          h.replaced = true;
-          accepted[k] = 1;
-          ++out.replaced;
-        } else {
-          h.verdict = RegionVerdict::Unsupported;
-        }
+    if (!(h.localAfter > h.localBefore)) return RegionVerdict::NotImproved;
+    const CsgTree trial = assemble(std::ptrdiff_t(k));
+    const Fitness f = model.evaluate(library.adopt(trial));
+    if (!(f.total > best + gain)) return RegionVerdict::NoGain;
+    const std::size_t ghosts = ghostPoints(scan, trial, ops, tolerance);
+    const double score = f.total - 2.0 * double(ghosts);
+    if (!(score > best + gain)) return RegionVerdict::Ghost;
+    if (!bestSupport) {
+      bestSupport = support(tree);
+      if (bestSupport) {
+        out.area = bestSupport->area;
+        out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
       }
     }
-    out.regions.push_back(h);
+    const std::optional<SurfaceSupport> s = support(trial);
+    if (s) h.unsupported = s->unsupported;
+    if (!bestSupport || !s) return RegionVerdict::Unsupported;
+    const double density = double(scan.size()) / bestSupport->area;
+    if (!(score - 2.0 * density * (s->unsupported - bestSupport->unsupported) > best + gain))
+      return RegionVerdict::Unsupported;
+    best = score;
+    bestSupport->unsupported = out.unsupportedAfter = s->unsupported;
+    out.ghostAfter = ghosts;
+    accepted[k] = 1;
+    ++out.replaced;
+    return RegionVerdict::Replaced;
+  };
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    found[k].report.verdict = judge(k);
+    out.regions.push_back(found[k].report);
   }
   if (out.replaced == 0) {
     // Nothing the points paid for: the voxel tree, as it was (its own stage

@@ -88,8 +88,9 @@ struct HybridRegion {
   std::size_t generations = 0;  ///< generations of its search
   double localBefore = 0.0;     ///< the subtree's fitness on the region's points
   double localAfter = 0.0;      ///< the search's best tree's
-  bool replaced = false;        ///< the refined subtree went into the tree
   RegionVerdict verdict = RegionVerdict::NotImproved;  ///< why it went in or not
+  /// The refined subtree went into the tree.
+  bool replaced() const { return verdict == RegionVerdict::Replaced; }
   double unsupported = -1.0;  ///< the tree with it: boundary no point is near (< 0: not weighed)
   std::size_t primitivesBefore = 0;  ///< primitives of the subtree
   std::size_t primitivesAfter = 0;   ///< primitives of the refined subtree

@@ -75,7 +75,7 @@ TEST(Hybrid, CutsASlotNarrowerThanAVoxel) {
   const HybridResult r = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
   EXPECT_GT(r.badPoints, 500u);
   ASSERT_EQ(r.regions.size(), 1u);
-  EXPECT_TRUE(r.regions[0].replaced);
+  EXPECT_TRUE(r.regions[0].replaced());
   EXPECT_EQ(r.replaced, 1u);
   EXPECT_GT(r.after.total, r.before.total);
   EXPECT_EQ(r.primitivesBefore, 1u);
@@ -115,7 +115,7 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
   const HybridResult refused = refineTree(scan, voxelTree, slabOnly, grid, inside);
   ASSERT_EQ(refused.regions.size(), 1u);
   EXPECT_NE(refused.regions[0].verdict, RegionVerdict::Replaced);
-  EXPECT_FALSE(refused.regions[0].replaced);
+  EXPECT_FALSE(refused.regions[0].replaced());
   EXPECT_EQ(refused.replaced, 0u);
   EXPECT_TRUE(refused.tree.structurallyEqual(voxelTree)) << treeNodeJson(refused.tree);
   EXPECT_EQ(refused.ghostAfter, refused.ghostBefore);
