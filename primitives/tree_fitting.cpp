@@ -467,23 +467,7 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
   std::vector<std::vector<int>> active(points.size()), faces(points.size());
   std::vector<double> side(points.size(), 0.0);
   // Each leaf's polarity: -1 when it enters the solid complemented.
-  std::vector<double> polarity(input.size(), 1.0);
-  {
-    std::unordered_map<const Node*, double> sign;
-    const auto walk = [&sign](const auto& self, const Node& node, double value) -> void {
-      if (node.kind == NodeKind::Primitive) {
-        sign.emplace(&node, value);
-        return;
-      }
-      for (std::size_t k = 0; k < node.children.size(); ++k) {
-        const bool flips =
-            node.kind == NodeKind::Complement || (node.kind == NodeKind::Difference && k > 0);
-        self(self, *node.children[k], flips ? -value : value);
-      }
-    };
-    walk(walk, *tree.root(), 1.0);
-    for (std::size_t l = 0; l < input.size(); ++l) polarity[l] = sign.at(parameters.leaves()[l]);
-  }
+  const std::span<const int> polarity = parameters.polarities();
   const double exposed = 0.05 * tolerance;  // a face's foot this near the surface is on it
   const double nearBand = options.nearDistance * tolerance;
   const double cosLimit = std::cos(options.nearAngle * std::numbers::pi / 180.0);

@@ -81,6 +81,7 @@ struct TreeParameters::Data {
   std::vector<std::pair<double, std::size_t>> radii;
   std::vector<std::pair<Vec3, std::size_t>> centres;
   std::vector<const Node*> leaves;
+  std::vector<int> polarities;  // per leaf
   std::vector<LeafModel> models;
 
   std::size_t addBlock(Kind kind, std::span<const double> start, bool constant = false) {
@@ -276,7 +277,10 @@ TreeParameters::TreeParameters(const CsgTree& tree, double scale, const Vec3& pi
     }
   };
   walk(walk, *tree.root(), 1);
-  for (const Node* leaf : d.leaves) d.models.push_back(d.model(leaf->primitive, polarity.at(leaf)));
+  for (const Node* leaf : d.leaves) {
+    d.polarities.push_back(polarity.at(leaf));
+    d.models.push_back(d.model(leaf->primitive, d.polarities.back()));
+  }
   for (const LeafModel& m : d.models)
     for (const std::size_t b : m.blocks) ++d.blocks[b].users;
 }
@@ -289,6 +293,8 @@ const std::vector<double>& TreeParameters::values() const { return data_->values
 const std::vector<ParameterBlock>& TreeParameters::blocks() const { return data_->blocks; }
 std::size_t TreeParameters::leafCount() const { return data_->leaves.size(); }
 std::span<const Node* const> TreeParameters::leaves() const { return data_->leaves; }
+
+std::span<const int> TreeParameters::polarities() const { return data_->polarities; }
 
 std::span<const std::size_t> TreeParameters::leafBlocks(std::size_t leaf) const {
   return data_->models.at(leaf).blocks;

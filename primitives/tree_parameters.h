@@ -90,6 +90,9 @@ class TreeParameters {
   CsgTree tree(std::span<const Primitive> primitives) const;
   /// The distinct leaf nodes, in depth-first order.
   std::span<const Node* const> leaves() const;
+  /// Each leaf's polarity, in the order of leaves(): -1 when it enters the
+  /// solid complemented (a cutter), +1 otherwise, as first met depth first.
+  std::span<const int> polarities() const;
   /// Blocks used by more than one leaf: the relations kept exact.
   std::size_t sharedBlocks() const;
 
