@@ -289,8 +289,7 @@ BrepSummary summarize(const TopoDS_Shape& shape) {
 
 namespace {
 
-// A built solid with its faces of one surface merged: one solid, or a
-// compound of several.
+// A built solid: one solid, or a compound of several.
 struct Candidate {
   TopoDS_Shape shape;
   std::size_t solids = 0;
@@ -298,19 +297,7 @@ struct Candidate {
   bool valid = false;
 };
 
-Candidate candidate(const TopoDS_Shape& built, bool unifyFaces) {
-  TopoDS_Shape shape = built;
-  if (unifyFaces) {
-    // Merging is cosmetic: when OpenCASCADE cannot do it, or its result is
-    // not valid, the pieces stay as the booleans left them.
-    try {
-      ShapeUpgrade_UnifySameDomain unify(shape, true, true, false);
-      unify.Build();
-      const TopoDS_Shape merged = unify.Shape();
-      if (Builder::hasSolid(merged) && BRepCheck_Analyzer(merged).IsValid()) shape = merged;
-    } catch (const Standard_Failure&) {
-    }
-  }
+Candidate candidate(const TopoDS_Shape& shape) {
   // Keep the solids alone (a boolean's result is a compound).
   std::vector<TopoDS_Shape> solids;
   for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) solids.push_back(e.Current());
@@ -327,6 +314,21 @@ Candidate candidate(const TopoDS_Shape& built, bool unifyFaces) {
   }
   c.volume = shapeVolume(c.shape);
   c.valid = c.solids > 0 && BRepCheck_Analyzer(c.shape).IsValid();
+  return c;
+}
+
+// The candidate with the faces of one surface merged, when OpenCASCADE
+// can do it and the result is as valid (merging is cosmetic). Only ever
+// given the chosen solid: on the wrong solids a boolean can leave, merging
+// ran for more than ten minutes on one (part 143 of the InverseCSG parts).
+Candidate unified(const Candidate& c) {
+  try {
+    ShapeUpgrade_UnifySameDomain unify(c.shape, true, true, false);
+    unify.Build();
+    Candidate merged = candidate(unify.Shape());
+    if (merged.valid && merged.solids == c.solids) return merged;
+  } catch (const Standard_Failure&) {
+  }
   return c;
 }
 
@@ -361,7 +363,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
       NodePath path;
       const std::optional<TopoDS_Shape> shape = b.node(*t.root(), path);
       if (!shape) throw CadError("the solid is empty: no point lies inside the tree");
-      tries.push_back({t, candidate(*shape, options.unifyFaces)});
+      tries.push_back({t, candidate(*shape)});
     } catch (const CadError& e) {
       if (!firstError) firstError = e;
     } catch (const Standard_Failure& e) {
@@ -440,7 +442,12 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   }
 
   BrepResult result;
-  result.shape = chosen->solid.shape;
+  if (options.unifyFaces) {
+    const Candidate merged = unified(chosen->solid);
+    result.shape = agrees(merged) ? merged.shape : chosen->solid.shape;
+  } else {
+    result.shape = chosen->solid.shape;
+  }
   try {
     if (options.nameFaces) {
       const auto names = leafNames(chosen->tree);
