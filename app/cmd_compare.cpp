@@ -131,6 +131,8 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     fo.resolution = base.resolution;
     fo.seed = base.seed;
     fo.detect = base.detect;
+    fo.refineThin = base.refineThin;
+    fo.memoryLimit = base.memoryLimit;
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, fo, {}, console.progress());
     if (!found.ok()) throw ParseError(scanPath.string() + ": " + found.detection.message);
     const double detectSeconds = watch.seconds();

@@ -30,6 +30,10 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
       ->check(CLI::IsMember({"hybrid", "voxel", "gp"}));
   app.add_option("--res", s.resolution, "Voxels along the longest side of the part")
       ->check(inRange(8, 1024));
+  app.add_flag("!--no-refine-thin", s.pipeline.refineThin,
+               "Keep the resolution as given even when the surfaces show a wall, slot, rod or "
+               "hole thinner than two voxels (by default the grid is then laid finer, up to "
+               "twice the resolution)");
   app.add_option("--seed", s.seed, "Random seed; the same seed gives the same tree")
       ->check(nonNegativeInteger());
   app.add_option("--label", s.labelMethod,
@@ -274,7 +278,18 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
   }
   report["parameters"] = std::move(parameters);
   const auto& dims = rec.grid.dims();
-  report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}}, {"voxel_size", rec.grid.voxelSize()}};
+  report["grid"] = {{"dims", {dims[0], dims[1], dims[2]}},
+                    {"voxel_size", rec.grid.voxelSize()},
+                    {"resolution", rec.resolution}};
+  if (rec.method != Method::Imported && rec.method != Method::Gp) {
+    // The features that made the grid finer (thinner than two voxels at the
+    // asked resolution), thinnest first.
+    nlohmann::ordered_json thin = nlohmann::ordered_json::array();
+    for (const ThinFeature& f : rec.thin) {
+      thin.push_back({{"kind", thinKindName(f.kind)}, {"thickness", f.thickness}});
+    }
+    report["grid"]["thin_features"] = std::move(thin);
+  }
   if (rec.method == Method::Imported) {
     report["counts"] = {{"surfaces", rec.detection.surfaces.size()}};
   } else if (rec.method != Method::Gp) {

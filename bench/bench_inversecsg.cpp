@@ -60,6 +60,7 @@ struct Options {
   std::size_t points = 50000;
   double noise = 0.0;
   int resolution = 64;
+  bool refineThin = true;
   int iouSamples = 200000;
   double timeLimit = 0.0;
   Method method = Method::Hybrid;
@@ -158,6 +159,7 @@ Result runModel(const Options& opt, const std::string& model) {
 
     ReconstructOptions ro;
     ro.resolution = opt.resolution;
+    ro.refineThin = opt.refineThin;
     ro.seed = 1;
     ro.timeLimit = opt.timeLimit;
     ro.method = opt.method;
@@ -166,6 +168,7 @@ Result runModel(const Options& opt, const std::string& model) {
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.status = statusName(rec.status);
     res.note = rec.message;
+    if (rec.resolution != opt.resolution) res.note += ", res " + std::to_string(rec.resolution);
     if (rec.timeLimitHit) res.note += " (time limit hit)";
     if (!rec.ok()) return res;
     res.primitives = long(rec.tree.primitiveCount());
@@ -320,7 +323,7 @@ std::vector<std::string> splitList(const std::string& s) {
 int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
-               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp]\n",
+               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin]\n",
                argv0);
   return 2;
 }
@@ -338,6 +341,8 @@ int main(int argc, char** argv) {
       opt.noise = std::atof(argv[++i]);
     } else if (arg == "--res" && hasValue) {
       opt.resolution = std::atoi(argv[++i]);
+    } else if (arg == "--no-refine-thin") {
+      opt.refineThin = false;
     } else if (arg == "--models" && hasValue) {
       opt.models = splitList(argv[++i]);
     } else if (arg == "--samples" && hasValue) {
@@ -376,9 +381,10 @@ int main(int argc, char** argv) {
   if (opt.timeLimit > 0.0) std::snprintf(limitText, sizeof limitText, "%g s", opt.timeLimit);
   std::printf(
       "InverseCSG benchmark %s: %zu models, %zu points per mesh, noise %.4f D, res %d, "
-      "method %s, time limit %s\n",
+      "method %s, time limit %s%s\n",
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
-      std::string(methodName(opt.method)).c_str(), limitText);
+      std::string(methodName(opt.method)).c_str(), limitText,
+      opt.refineThin ? ", finer grid where thin" : "");
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",

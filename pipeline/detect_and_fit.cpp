@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "primitives/bounding_box.h"
 #include "primitives/surface_refinement.h"
@@ -92,6 +93,10 @@ OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces, s
   return volume <= 1.25 * minimalVolume ? aligned : minimal;
 }
 
+double voxelStageBytes(std::size_t candidates, std::size_t voxels) {
+  return 3.0 * double(std::max<std::size_t>(candidates, 1)) / 8.0 * double(voxels);
+}
+
 SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOptions& options,
                                    const StageCallback& onStage, const ProgressCallback& progress) {
   if (scan.empty()) throw std::invalid_argument("the scan has no points");
@@ -125,16 +130,65 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
 
   if (onStage) onStage("hypotheses", false, {});
   start = Clock::now();
-  GridOptions go;
-  go.resolution = options.resolution;
-  out.grid = VoxelGrid::around(gridBox(scan, out.detection.surfaces, options.seed), go);
-  HypothesisOptions ho = options.hypotheses;
-  ho.voxelSize = out.grid.voxelSize();
-  ho.seed = std::uint32_t(options.seed);
-  out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
+  const OrientedBox box = gridBox(scan, out.detection.surfaces, options.seed);
+  const auto layGrid = [&](int resolution) {
+    GridOptions go;
+    go.resolution = resolution;
+    out.grid = VoxelGrid::around(box, go);
+    out.resolution = resolution;
+    HypothesisOptions ho = options.hypotheses;
+    ho.voxelSize = out.grid.voxelSize();
+    ho.seed = std::uint32_t(options.seed);
+    out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
+  };
+  layGrid(options.resolution);
+  std::string refined;
+  if (options.refineThin && options.maxRefinement > 1.0) {
+    const double h = out.grid.voxelSize();
+    ThinFeatureOptions to;
+    to.maxThickness = options.thinVoxels * h;
+    to.reach = h;
+    out.thin = findThinFeatures(scan, out.detection.surfaces, to);
+    if (!out.thin.empty()) {
+      const double thinnest = std::max(out.thin.front().thickness, 1e-12);
+      // Voxels scale as 1 / resolution: the resolution that gives the
+      // thinnest feature thinVoxels voxels, at most maxRefinement times the
+      // asked one. Not laid when its voxels would be under noiseVoxels times
+      // the residual of the feature's own surfaces: a part of two voxels
+      // there is noise, not a wall. (The scan-wide noise estimate is no
+      // guide here: its neighbourhoods straddle both faces of a thin wall.)
+      const ThinFeature& t = out.thin.front();
+      double residual = out.detection.surfaces[std::size_t(t.first)].rms;
+      if (t.second >= 0) {
+        residual = std::max(residual, out.detection.surfaces[std::size_t(t.second)].rms);
+      }
+      const int finer = int(std::min(std::ceil(options.resolution * to.maxThickness / thinnest),
+                                     std::floor(options.resolution * options.maxRefinement)));
+      const double finerVoxel = h * double(options.resolution) / double(finer);
+      if (finer > options.resolution && finerVoxel >= options.noiseVoxels * residual) {
+        const VoxelGrid coarse = out.grid;
+        HypothesisSet coarseHypotheses = std::move(out.hypotheses);
+        layGrid(finer);
+        if (options.memoryLimit > 0 &&
+            voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount()) >
+                double(options.memoryLimit)) {
+          out.grid = coarse;  // the finer grid does not fit: the asked one
+          out.hypotheses = std::move(coarseHypotheses);
+          out.resolution = options.resolution;
+        } else {
+          char buf[128];
+          std::snprintf(buf, sizeof(buf), ", resolution %d (a %s %.2g voxels thin)", finer,
+                        std::string(thinKindName(out.thin.front().kind)).c_str(),
+                        thinnest / h);
+          refined = buf;
+        }
+      }
+    }
+  }
   out.hypothesisSeconds = secondsSince(start);
   if (onStage) {
-    onStage("hypotheses", true, std::to_string(out.hypotheses.candidates.size()) + " candidates");
+    onStage("hypotheses", true,
+            std::to_string(out.hypotheses.candidates.size()) + " candidates" + refined);
   }
   return out;
 }

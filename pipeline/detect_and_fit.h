@@ -15,6 +15,7 @@
 #include "primitives/hypotheses.h"
 #include "primitives/regularization.h"
 #include "primitives/surface_detection.h"
+#include "primitives/thin_features.h"
 #include "voxel/voxel_grid.h"
 
 namespace csgvox {
@@ -35,7 +36,26 @@ struct DetectAndFitOptions {
   /// scan of a solid's surfaces (scattered points), fraction of D. The
   /// bundled noisy scans have 0.005; uniform random points in a cube 0.06.
   double maxNoise = 0.02;
+  /// Finer voxels for thin parts: when the surfaces show a feature thinner
+  /// than `thinVoxels` voxels at `resolution` (a wall or a slot between
+  /// opposite planes that face each other, a rod or a hole), the grid is laid
+  /// at the resolution that gives the thinnest one `thinVoxels` voxels, at
+  /// most `maxRefinement` × `resolution`.
+  /// No finer grid is laid when its voxels would be smaller than
+  /// `noiseVoxels` × the RMS residual of the thin feature's own surfaces:
+  /// the labels would follow the noise, not the walls.
+  bool refineThin = true;
+  double thinVoxels = 2.0;
+  double maxRefinement = 2.0;
+  double noiseVoxels = 2.0;
+  /// Bytes the voxel stage may use (0: no limit): a finer grid that would
+  /// need more (voxelStageBytes) falls back to `resolution`.
+  std::size_t memoryLimit = 0;
 };
+
+/// Bytes the voxel stage needs for `candidates` on `voxels` (the
+/// description sets, and up to twice that again for the optimisation).
+double voxelStageBytes(std::size_t candidates, std::size_t voxels);
 
 /// Surfaces and candidates of a scan, as the main job computes them.
 struct SurfacesAndCandidates {
@@ -43,6 +63,8 @@ struct SurfacesAndCandidates {
   RegularizationReport regularization;  ///< what the regularisation changed
   VoxelGrid grid;                       ///< the main job's voxel grid (its size: the fit tolerance)
   HypothesisSet hypotheses;             ///< bounded candidates (empty unless detection.ok())
+  int resolution = 0;                   ///< the grid's resolution (finer than asked when thin)
+  std::vector<ThinFeature> thin;        ///< features thinner than thinVoxels at the asked one
   double detectSeconds = 0.0;           ///< RANSAC
   double refineSeconds = 0.0;           ///< Ceres refinement
   double regularizeSeconds = 0.0;       ///< regularisation
@@ -60,7 +82,7 @@ OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces,
                     std::uint64_t seed = 1);
 
 /// Detects, refines and regularises the scan's surfaces, lays the voxel
-/// grid over gridBox() and builds the bounded hypotheses with the grid's
+/// grid over gridBox() (finer where the part is thin: refineThin) and builds the bounded hypotheses with the grid's
 /// voxel size as their fit tolerance. Stages "detect" and "hypotheses" are
 /// reported to `onStage`. `progress` is passed to detection: returning
 /// false cancels it (detection.status is then Cancelled and nothing after

@@ -211,20 +211,20 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.detection = std::move(found.detection);
   out.grid = std::move(found.grid);
   out.hypotheses = std::move(found.hypotheses);
+  out.resolution = found.resolution;
+  out.thin = std::move(found.thin);
   out.timeLimitHit = Clock::now() > deadline;
   if (options.method != Method::Gp && options.memoryLimit > 0) {
-    const double perVoxel =
-        3.0 * double(std::max<std::size_t>(out.hypotheses.candidates.size(), 1)) / 8.0;
-    const double need = perVoxel * double(out.grid.voxelCount());
+    const double need = voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount());
     if (need > double(options.memoryLimit)) {
       // Voxel count grows with the cube of the resolution.
-      const double fit = double(options.resolution) * std::cbrt(double(options.memoryLimit) / need);
+      const double fit = double(out.resolution) * std::cbrt(double(options.memoryLimit) / need);
       out.status = Reconstruction::Status::TooLarge;
       char buf[256];
       std::snprintf(buf, sizeof(buf),
                     "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
                     "than the %.1f GiB allowed; use a resolution of at most %d",
-                    options.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
+                    out.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
                     out.grid.voxelCount(), double(options.memoryLimit) / double(1u << 30),
                     int(fit));
       out.message = buf;
@@ -276,6 +276,8 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   fo.resolution = options.resolution;
   fo.seed = options.seed;
   fo.detect = options.detect;
+  fo.refineThin = options.refineThin && options.method != Method::Gp;
+  fo.memoryLimit = options.memoryLimit;
   SurfacesAndCandidates found =
       detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
         if (progress) progress(fraction, step);

@@ -47,6 +47,9 @@ Method methodFromName(std::string_view name);
 struct ReconstructOptions {
   Method method = Method::Hybrid;  ///< how the tree is built
   int resolution = 64;             ///< voxels along the longest side of the part's oriented box
+  /// Up to twice the resolution when the surfaces show a feature thinner
+  /// than two voxels (DetectAndFitOptions::refineThin).
+  bool refineThin = true;
   std::uint64_t seed = 1;          ///< seeds detection and hypotheses; same seed, same tree
   DetectOptions detect;            ///< surface detection (its seed is replaced by `seed`)
   LabelOptions labels;             ///< voxel labelling
@@ -92,6 +95,8 @@ struct Reconstruction {
   DetectionResult detection;
   HypothesisSet hypotheses;
   VoxelGrid grid;
+  int resolution = 0;              ///< the grid's (finer than asked when the part is thin)
+  std::vector<ThinFeature> thin;   ///< features thinner than two voxels at the asked resolution
   VoxelLabels labels;
   Method method = Method::Voxel;   ///< the method that built `tree`
   Construction construction;       ///< voxel method: the optimisations' result
