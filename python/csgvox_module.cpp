@@ -23,6 +23,7 @@
 #include "io/text_export.h"
 #include "io/tree_json.h"
 #include "pipeline/reconstruct.h"
+#include "primitives/solver_log.h"
 
 namespace py = pybind11;
 using namespace csgvox;
@@ -140,6 +141,9 @@ PYBIND11_MODULE(csgvox, m) {
       "method=...) -> Result(.tree, .report); Tree.to_json(), to_scad(), to_text(),\n"
       "evaluate(points), Tree.from_json(text).";
   m.attr("__version__") = "0.1.0";
+  // As the command line: the solver's per-step warnings of a fit that
+  // recovers are not news for the user; its errors still reach stderr.
+  csgvox::setSolverLog(csgvox::SolverLog::Errors);
 
   // The library's exceptions keep their one-line messages.
   static py::exception<IoError> ioError(m, "IoError", PyExc_OSError);
