@@ -131,26 +131,31 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   if (onStage) onStage("hypotheses", false, {});
   start = Clock::now();
   const OrientedBox box = gridBox(scan, out.detection.surfaces, options.seed);
-  const auto layGrid = [&](int resolution) {
+  const auto gridAt = [&](int resolution) {
     GridOptions go;
     go.resolution = resolution;
-    out.grid = VoxelGrid::around(box, go);
+    return VoxelGrid::around(box, go);
+  };
+  const auto layGrid = [&](int resolution) {
+    out.grid = gridAt(resolution);
     out.resolution = resolution;
     HypothesisOptions ho = options.hypotheses;
     ho.voxelSize = out.grid.voxelSize();
     ho.seed = std::uint32_t(options.seed);
     out.hypotheses = generateHypotheses(scan, out.detection.surfaces, ho);
   };
-  layGrid(options.resolution);
+  // The resolution: the asked one, or finer when the part is thin (decided
+  // on the asked grid's voxel size; hypotheses are built once, on the grid
+  // chosen).
+  int resolution = options.resolution;
   std::string refined;
   if (options.refineThin && options.maxRefinement > 1.0) {
-    const double h = out.grid.voxelSize();
+    const double h = gridAt(options.resolution).voxelSize();
     ThinFeatureOptions to;
     to.maxThickness = options.thinVoxels * h;
     to.reach = h;
     out.thin = findThinFeatures(scan, out.detection.surfaces, to);
     if (!out.thin.empty()) {
-      const double thinnest = std::max(out.thin.front().thickness, 1e-12);
       // Voxels scale as 1 / resolution: the resolution that gives the
       // thinnest feature thinVoxels voxels, at most maxRefinement times the
       // asked one. Not laid when its voxels would be under noiseVoxels times
@@ -158,6 +163,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
       // there is noise, not a wall. (The scan-wide noise estimate is no
       // guide here: its neighbourhoods straddle both faces of a thin wall.)
       const ThinFeature& t = out.thin.front();
+      const double thinnest = std::max(t.thickness, 1e-12);
       double residual = out.detection.surfaces[std::size_t(t.first)].rms;
       if (t.second >= 0) {
         residual = std::max(residual, out.detection.surfaces[std::size_t(t.second)].rms);
@@ -166,24 +172,20 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
                                      std::floor(options.resolution * options.maxRefinement)));
       const double finerVoxel = h * double(options.resolution) / double(finer);
       if (finer > options.resolution && finerVoxel >= options.noiseVoxels * residual) {
-        const VoxelGrid coarse = out.grid;
-        HypothesisSet coarseHypotheses = std::move(out.hypotheses);
-        layGrid(finer);
-        if (options.memoryLimit > 0 &&
-            voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount()) >
-                double(options.memoryLimit)) {
-          out.grid = coarse;  // the finer grid does not fit: the asked one
-          out.hypotheses = std::move(coarseHypotheses);
-          out.resolution = options.resolution;
-        } else {
-          char buf[128];
-          std::snprintf(buf, sizeof(buf), ", resolution %d (a %s %.2g voxels thin)", finer,
-                        std::string(thinKindName(out.thin.front().kind)).c_str(),
-                        thinnest / h);
-          refined = buf;
-        }
+        resolution = finer;
+        char buf[128];
+        std::snprintf(buf, sizeof(buf), ", resolution %d (a %s %.2g voxels thin)", finer,
+                      std::string(thinKindName(t.kind)).c_str(), thinnest / h);
+        refined = buf;
       }
     }
+  }
+  layGrid(resolution);
+  if (resolution != options.resolution && options.memoryLimit > 0 &&
+      voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount()) >
+          double(options.memoryLimit)) {
+    layGrid(options.resolution);  // the finer grid does not fit: the asked one
+    refined.clear();
   }
   out.hypothesisSeconds = secondsSince(start);
   if (onStage) {

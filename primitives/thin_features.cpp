@@ -42,14 +42,16 @@ std::vector<ThinFeature> findThinFeatures(const PointCloud& scan, std::span<cons
     }
   }
 
-  // A plane's inliers, sampled evenly, and a k-d tree over all of them
+  // Each plane's inliers, sampled evenly once; a k-d tree over all of them
   // (built only for planes that have an opposite one near enough).
-  const auto sample = [&](const Surface& s) {
-    std::vector<Vec3> points;
-    const std::size_t n = s.inliers.size(), k = std::min(n, options.samples);
-    for (std::size_t i = 0; i < k; ++i) points.push_back(scan.points[s.inliers[i * n / k]]);
-    return points;
-  };
+  std::vector<std::vector<Vec3>> samples(surfaces.size());
+  for (int s : planes) {
+    const std::vector<std::uint32_t>& inliers = surfaces[std::size_t(s)].inliers;
+    const std::size_t n = inliers.size(), k = std::min(n, options.samples);
+    for (std::size_t i = 0; i < k; ++i) {
+      samples[std::size_t(s)].push_back(scan.points[inliers[i * n / k]]);
+    }
+  }
   std::vector<std::unique_ptr<NearestNeighbors>> trees(surfaces.size());
   const auto tree = [&](int s) -> const NearestNeighbors& {
     if (!trees[std::size_t(s)]) {
@@ -71,7 +73,7 @@ std::vector<ThinFeature> findThinFeatures(const PointCloud& scan, std::span<cons
         std::swap(a, b);
       }
       const auto& onto = *surfaces[std::size_t(b)].as<PlaneSurface>();
-      const std::vector<Vec3> points = sample(surfaces[std::size_t(a)]);
+      const std::vector<Vec3>& points = samples[std::size_t(a)];
       std::size_t facing = 0;
       double sum = 0.0;  // signed distances of the facing points to the other plane
       for (const Vec3& p : points) {
