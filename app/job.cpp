@@ -308,6 +308,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
       nlohmann::ordered_json regions = nlohmann::ordered_json::array();
       for (const HybridRegion& r : h.regions) {
         regions.push_back({{"bad_points", r.badPoints},
+                           {"unsupported_boundary", r.unsupportedArea},
                            {"points", r.points},
                            {"members", r.members},
                            {"library", r.library},

@@ -6,7 +6,7 @@
 // volumetric IoU between the tree and the mesh's solid.
 //
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
-//        [--models 011,039,...] [--samples S] [--time-limit T]
+//        [--models 011,039,...] [--samples S] [--time-limit T] [--keep OUTDIR]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -16,6 +16,13 @@
 //   --samples     random points of the IoU estimate (default 200000)
 //   --time-limit  ReconstructOptions::timeLimit in seconds (default 0: none);
 //                 a model whose process runs past 3 T + 60 s is killed
+//   --no-unsupported-regions  the hybrid searches only where points are
+//                 badly explained (HybridOptions::unsupportedRegions off)
+//   --keep        folder where each model's scan (NNN/scan.ply, after the
+//                 noise) and tree (NNN/tree.json) are written, to look at a
+//                 weak part with `csgvox eval` or run it again with `csgvox`,
+//                 and the IoU's samples where they disagree: NNN/extra.ply in
+//                 the tree only, NNN/missing.ply in the part only
 //
 // Each model runs in a child process of its own, so a crash or a runaway
 // model becomes a row with its reason and the run goes on. The children's
@@ -47,7 +54,9 @@
 
 #include "core/statistics.h"
 #include "io/mesh_files.h"
+#include "io/point_writer.h"
 #include "io/scan_reader.h"
+#include "io/tree_json.h"
 #include "mesh/mesh_solid.h"
 #include "pipeline/reconstruct.h"
 
@@ -61,10 +70,12 @@ struct Options {
   double noise = 0.0;
   int resolution = 64;
   bool refineThin = true;
+  bool unsupportedRegions = true;
   int iouSamples = 200000;
   double timeLimit = 0.0;
   Method method = Method::Hybrid;
   std::vector<std::string> models;
+  std::filesystem::path keep;  // empty: write nothing
 };
 
 // One line of inversecsg-results.csv.
@@ -125,20 +136,41 @@ std::map<std::string, Reference> readReferences(const std::filesystem::path& csv
   return refs;
 }
 
-// Volumetric IoU of two solids on uniform random points of `box`.
+// Volumetric IoU of two solids on uniform random points of `box`, and where
+// they differ: the volume only in A and only in B, as fractions of B's.
+struct Overlap {
+  double iou = 1.0;
+  double onlyA = 0.0;
+  double onlyB = 0.0;
+  PointCloud samplesOnlyA, samplesOnlyB;  // the samples themselves
+};
+
 template <class InA, class InB>
-double sampledIou(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
+Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::size_t both = 0, either = 0;
+  std::size_t both = 0, onlyA = 0, onlyB = 0;
+  std::vector<Vec3> samplesA, samplesB;
   for (int i = 0; i < samples; ++i) {
     Vec3 p;
     for (int k = 0; k < 3; ++k) p[k] = box.min[k] + unit(rng) * (box.max[k] - box.min[k]);
     const bool a = inA(p), b = inB(p);
     both += a && b;
-    either += a || b;
+    onlyA += a && !b;
+    onlyB += b && !a;
+    if (a && !b) samplesA.push_back(p);
+    if (b && !a) samplesB.push_back(p);
   }
-  return either ? double(both) / double(either) : 1.0;
+  Overlap o;
+  o.samplesOnlyA.points = std::move(samplesA);
+  o.samplesOnlyB.points = std::move(samplesB);
+  const std::size_t either = both + onlyA + onlyB, inB_ = both + onlyB;
+  if (either > 0) o.iou = double(both) / double(either);
+  if (inB_ > 0) {
+    o.onlyA = double(onlyA) / double(inB_);
+    o.onlyB = double(onlyB) / double(inB_);
+  }
+  return o;
 }
 
 // Runs one model; never throws.
@@ -156,10 +188,16 @@ Result runModel(const Options& opt, const std::string& model) {
       std::normal_distribution<double> gauss(0.0, sigma);
       for (Vec3& p : scan.points) p += Vec3(gauss(rng), gauss(rng), gauss(rng));
     }
+    const std::filesystem::path keep = opt.keep.empty() ? opt.keep : opt.keep / model;
+    if (!keep.empty()) {
+      std::filesystem::create_directories(keep);
+      writePointCloudPly(keep / "scan.ply", scan);
+    }
 
     ReconstructOptions ro;
     ro.resolution = opt.resolution;
     ro.refineThin = opt.refineThin;
+    ro.hybrid.unsupportedRegions = opt.unsupportedRegions;
     ro.seed = 1;
     ro.timeLimit = opt.timeLimit;
     ro.method = opt.method;
@@ -171,6 +209,7 @@ Result runModel(const Options& opt, const std::string& model) {
     if (rec.resolution != opt.resolution) res.note += ", res " + std::to_string(rec.resolution);
     if (rec.timeLimitHit) res.note += " (time limit hit)";
     if (!rec.ok()) return res;
+    if (!keep.empty()) writeTreeJson(keep / "tree.json", rec.tree);
     res.primitives = long(rec.tree.primitiveCount());
     res.operations = long(rec.tree.operationCount());
 
@@ -192,9 +231,18 @@ Result runModel(const Options& opt, const std::string& model) {
       box = box.grown(0.1 * meshBox.diagonal());
       res.note = "unbounded tree; " + res.note;
     }
-    res.iou = sampledIou(
+    const Overlap o = sampledOverlap(
         box, [&](const Vec3& p) { return rec.tree.contains(p); },
         [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1);
+    res.iou = o.iou;
+    char where[96];
+    std::snprintf(where, sizeof where, "; extra %.1f %%, missing %.1f %% of the part's volume",
+                  100.0 * o.onlyA, 100.0 * o.onlyB);
+    res.note += where;
+    if (!keep.empty()) {
+      writePointCloudPly(keep / "extra.ply", o.samplesOnlyA);
+      writePointCloudPly(keep / "missing.ply", o.samplesOnlyB);
+    }
   } catch (const std::exception& e) {
     if (res.seconds < 0.0) res.status = "error";
     res.note = std::string("exception: ") + e.what();
@@ -323,7 +371,8 @@ std::vector<std::string> splitList(const std::string& s) {
 int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
-               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin]\n",
+               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin] "
+               "[--keep OUTDIR]\n",
                argv0);
   return 2;
 }
@@ -343,8 +392,12 @@ int main(int argc, char** argv) {
       opt.resolution = std::atoi(argv[++i]);
     } else if (arg == "--no-refine-thin") {
       opt.refineThin = false;
+    } else if (arg == "--no-unsupported-regions") {
+      opt.unsupportedRegions = false;
     } else if (arg == "--models" && hasValue) {
       opt.models = splitList(argv[++i]);
+    } else if (arg == "--keep" && hasValue) {
+      opt.keep = argv[++i];
     } else if (arg == "--samples" && hasValue) {
       opt.iouSamples = std::atoi(argv[++i]);
     } else if (arg == "--time-limit" && hasValue) {

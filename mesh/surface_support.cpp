@@ -1,8 +1,8 @@
 #include "mesh/surface_support.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "mesh/surface_sampler.h"
@@ -18,18 +18,21 @@ SurfaceSupport surfaceSupport(const CsgTree& tree, const NearestNeighbors& scan,
   const SurfaceSample s = sampleSurface(tree, so);
   const double limit = options.distance * options.distance;
   const std::vector<Vec3>& p = s.cloud.points;
-  const std::size_t far = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, p.size()), std::size_t{0},
-      [&](const tbb::blocked_range<std::size_t>& r, std::size_t n) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-          double d2 = 0.0;
-          scan.nearest(p[i], &d2);
-          n += d2 > limit;
-        }
-        return n;
-      },
-      [](std::size_t a, std::size_t b) { return a + b; });
-  return {s.surfaceArea, s.surfaceArea * double(far) / double(p.size())};
+  std::vector<char> far(p.size(), 0);
+  tbb::parallel_for(std::size_t{0}, p.size(), [&](std::size_t i) {
+    double d2 = 0.0;
+    scan.nearest(p[i], &d2);
+    far[i] = d2 > limit;
+  });
+  SurfaceSupport out;
+  out.area = s.surfaceArea;
+  out.sampleArea = s.surfaceArea / double(p.size());
+  out.unsupported = out.sampleArea * double(std::count(far.begin(), far.end(), 1));
+  if (options.keepUnsupported) {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (far[i]) out.unsupportedSamples.push_back(p[i]);
+  }
+  return out;
 }
 
 }  // namespace csgvox

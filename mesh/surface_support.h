@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "core/csg_tree.h"
 #include "core/nearest_neighbors.h"
@@ -15,16 +16,19 @@ namespace csgvox {
 
 /// Options of surfaceSupport().
 struct SupportOptions {
-  double distance = 0.0;        ///< scan units: a boundary point farther from every scan point
-                                ///< is unsupported
-  std::size_t samples = 20000;  ///< boundary points sampled
-  std::uint64_t seed = 1;       ///< seed of the boundary sampling
+  double distance = 0.0;         ///< scan units: a boundary point farther from every scan point
+                                 ///< is unsupported
+  std::size_t samples = 20000;   ///< boundary points sampled
+  std::uint64_t seed = 1;        ///< seed of the boundary sampling
+  bool keepUnsupported = false;  ///< return the unsupported samples themselves
 };
 
 /// A tree's boundary area and the part of it no scan point is near.
 struct SurfaceSupport {
   double area = 0.0;         ///< estimated boundary area, scan units²
   double unsupported = 0.0;  ///< estimated area farther than the distance from every scan point
+  double sampleArea = 0.0;   ///< boundary area each sample stands for
+  std::vector<Vec3> unsupportedSamples;  ///< with keepUnsupported: those samples, in sample order
 };
 
 /// Samples the boundary of `tree` uniformly and measures the area whose

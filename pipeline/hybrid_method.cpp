@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -88,6 +89,8 @@ std::size_t ghostPoints(const PointCloud& scan, const CsgTree& tree, const SetOp
 // the tree (indices) its subtree is made of.
 struct Region {
   std::vector<std::uint32_t> bad;
+  std::vector<Vec3> unsupported;  // samples of the tree's boundary no scan point is near
+  double unsupportedArea = 0.0;   // the boundary area they stand for
   Aabb box;
   std::vector<std::size_t> members;
 };
@@ -122,6 +125,9 @@ std::vector<Region> joinMeetingRegions(std::vector<Region> regions,
         if (!meets(regions[a].box, regions[b].box)) continue;
         regions[a].bad.insert(regions[a].bad.end(), regions[b].bad.begin(), regions[b].bad.end());
         std::sort(regions[a].bad.begin(), regions[a].bad.end());
+        regions[a].unsupported.insert(regions[a].unsupported.end(), regions[b].unsupported.begin(),
+                                      regions[b].unsupported.end());
+        regions[a].unsupportedArea += regions[b].unsupportedArea;
         regions[a].box.extend(regions[b].box);
         selectMembers(regions[a], memberBounds);
         regions.erase(regions.begin() + std::ptrdiff_t(b));
@@ -135,6 +141,69 @@ std::vector<Region> joinMeetingRegions(std::vector<Region> regions,
 // The voxels whose centre lies in the box.
 VoxelSet voxelsIn(const VoxelGrid& grid, const Aabb& box) {
   return solidVoxels(CsgTree::leaf(Box{box.center(), Mat3::Identity(), 0.5 * box.size()}), grid);
+}
+
+// A change of a subtree that the voxel labels ask for: candidate `candidate`,
+// less (or intersected with, `intersect`) the subtree's leaf `leaf` (< 0:
+// alone), taken away (`cut`) or added.
+struct Repair {
+  std::ptrdiff_t gain = 0;  // voxels of the box set right less voxels set wrong
+  std::size_t candidate = 0;
+  std::ptrdiff_t leaf = -1;
+  bool intersect = false;
+  bool cut = true;
+};
+
+// A repair must set right at least a block of 2 × 2 × 2 voxels.
+constexpr std::ptrdiff_t kLeastRepair = 8;
+
+// The best `count` repairs of `subtree` inside `box` with a gain of at least kLeastRepair,
+// best first (ties in candidate, leaf order).
+std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
+                                 std::span<const Candidate> candidates, const VoxelGrid& grid,
+                                 const VoxelSet& inside, std::size_t count) {
+  const CsgTree boxLeaf = CsgTree::leaf(Box{box.center(), Mat3::Identity(), 0.5 * box.size()});
+  const VoxelSet inBox = solidVoxels(boxLeaf, grid);
+  const VoxelSet solid = solidVoxels(subtree, grid) & inBox;
+  const VoxelSet wrong = solid - inside;  // material the labels say is outside
+  const VoxelSet right = solid & inside;  // material the labels agree with
+  const VoxelSet missing = (inside & inBox) - solid;
+  const VoxelSet empty = inBox - solid - inside;
+  std::vector<VoxelSet> leaves;
+  for (const Node* leaf : subtree.leaves())
+    leaves.push_back(
+        solidVoxels(CsgTree::intersect({CsgTree::leaf(leaf->primitive), boxLeaf}), grid));
+  using Index = std::ptrdiff_t;
+  const auto n = [](const VoxelSet& a, const VoxelSet& b) {
+    return Index(VoxelSet::countAnd(a, b));
+  };
+  std::vector<Repair> out;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (!meets(candidates[c].tree.bounds(), box)) continue;
+    const VoxelSet v = solidVoxels(CsgTree::intersect({candidates[c].tree, boxLeaf}), grid);
+    if (v.count() == 0) continue;
+    const VoxelSet vWrong = v & wrong, vRight = v & right, vMissing = v & missing,
+                   vEmpty = v & empty;
+    const Index w = Index(vWrong.count()), r = Index(vRight.count());
+    const Index m = Index(vMissing.count()), e = Index(vEmpty.count());
+    const auto consider = [&](Index gain, Index leaf, bool intersect, bool cut) {
+      if (gain >= kLeastRepair) out.push_back({gain, c, leaf, intersect, cut});
+    };
+    consider(w - r, -1, false, true);
+    consider(m - e, -1, false, false);
+    for (std::size_t l = 0; l < leaves.size(); ++l) {
+      const Index wq = n(vWrong, leaves[l]), rq = n(vRight, leaves[l]);
+      const Index mq = n(vMissing, leaves[l]), eq = n(vEmpty, leaves[l]);
+      consider((w - wq) - (r - rq), Index(l), false, true);
+      consider(wq - rq, Index(l), true, true);
+      consider((m - mq) - (e - eq), Index(l), false, false);
+      consider(mq - eq, Index(l), true, false);
+    }
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const Repair& a, const Repair& b) { return a.gain > b.gain; });
+  if (out.size() > count) out.resize(count);
+  return out;
 }
 
 // What a region's search found.
@@ -179,6 +248,29 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   if (fits.size() > options.maxCandidates) fits.resize(options.maxCandidates);
 
+  // Where the subtree holds material no point bounds (or leaves a hole no
+  // point bounds), the repairs that would set its voxels right there: a
+  // candidate c, c − q or c ∩ q (q one of the subtree's primitives) taken
+  // away or added, scored by the region's voxels it sets right against the
+  // labels less those it sets wrong. The best become seeds, their
+  // candidates join the library.
+  std::vector<Repair> repairs;
+  if (!region.unsupported.empty())
+    repairs = voxelRepairs(out.subtree, region.box, candidates, grid, inside, options.maxRepairs);
+  std::vector<std::pair<std::size_t, std::size_t>> picked;  // the repairs' candidates first
+  for (const Repair& r : repairs) {
+    if (std::none_of(picked.begin(), picked.end(),
+                     [&](const auto& f) { return f.second == r.candidate; }))
+      picked.push_back({0, r.candidate});
+  }
+  for (const auto& f : fits) {
+    if (picked.size() >= std::max(options.maxCandidates, repairs.size())) break;
+    if (std::none_of(picked.begin(), picked.end(),
+                     [&](const auto& g) { return g.second == f.second; }))
+      picked.push_back(f);
+  }
+  fits = std::move(picked);
+
   // The library: the subtree's primitives and the fitting candidates'.
   std::vector<Primitive> primitives;
   std::vector<std::string> names;
@@ -210,6 +302,15 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   // taken away.
   const CsgTree subtree = library.adopt(out.subtree);
   std::vector<CsgTree> seeds = {subtree};
+  const std::vector<const Node*> subtreeLeaves = out.subtree.leaves();
+  for (const Repair& r : repairs) {
+    CsgTree t = library.adopt(candidates[r.candidate].tree);
+    if (r.leaf >= 0) {
+      const CsgTree q = library.adopt(CsgTree::leaf(subtreeLeaves[std::size_t(r.leaf)]->primitive));
+      t = r.intersect ? CsgTree::intersect({t, q}) : CsgTree::subtract({t, q});
+    }
+    seeds.push_back(r.cut ? CsgTree::subtract({subtree, t}) : CsgTree::unite({subtree, t}));
+  }
   for (const auto& [near, c] : fits) {
     const CsgTree candidate = library.adopt(candidates[c].tree);
     seeds.push_back(CsgTree::unite({subtree, candidate}));
@@ -225,6 +326,7 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
 
   HybridRegion& h = out.report;
   h.badPoints = region.bad.size();
+  h.unsupportedArea = region.unsupportedArea;
   h.points = points.size();
   h.members = region.members.size();
   h.library = library.size();
@@ -297,6 +399,54 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     selectMembers(r, memberBounds);
     regions.push_back(std::move(r));
   }
+
+  // The tree's boundary no scan point is near: material (or a hole) the
+  // voxels kept where the part has none, which no point can call bad. Its
+  // samples are grouped as the bad points are; a group is a region when the
+  // area it stands for would hold as many points as the least region.
+  const double tolerance = options.fitness.distanceTolerance * diagonal;
+  std::optional<NearestNeighbors> nearest;
+  SupportOptions so;
+  so.distance = options.supportDistance * tolerance;
+  so.samples = options.supportSamples;
+  so.seed = options.evolve.seed;
+  const auto support = [&](const CsgTree& t, bool keep) -> std::optional<SurfaceSupport> {
+    if (!nearest) nearest.emplace(scan.points);
+    SupportOptions o = so;
+    o.keepUnsupported = keep;
+    try {
+      return surfaceSupport(t, *nearest, o);
+    } catch (const std::invalid_argument&) {
+      return std::nullopt;
+    }
+  };
+  std::optional<SurfaceSupport> bestSupport;
+  if (options.unsupportedRegions) {
+    bestSupport = support(tree, true);
+    if (bestSupport && bestSupport->area > 0.0) {
+      out.area = bestSupport->area;
+      out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
+      std::vector<Vec3> samples = std::move(bestSupport->unsupportedSamples);
+      bestSupport->unsupportedSamples.clear();
+      std::vector<std::uint32_t> all(samples.size());
+      for (std::size_t i = 0; i < all.size(); ++i) all[i] = std::uint32_t(i);
+      const double density = double(scan.size()) / bestSupport->area;
+      for (const std::vector<std::uint32_t>& group :
+           pointRegions(samples, all, options.regionCell * voxel)) {
+        const double area = double(group.size()) * bestSupport->sampleArea;
+        if (area * density < double(least)) continue;
+        Region r;
+        for (const std::uint32_t i : group) {
+          r.unsupported.push_back(samples[i]);
+          r.box.extend(samples[i]);
+        }
+        r.unsupportedArea = area;
+        r.box = r.box.grown(margin);
+        selectMembers(r, memberBounds);
+        regions.push_back(std::move(r));
+      }
+    }
+  }
   regions = joinMeetingRegions(std::move(regions), memberBounds);
 
   // The regions' searches, in parallel; each is deterministic for its seed.
@@ -342,24 +492,9 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   // that of the points the boundary it adds where the scan has none would
   // hold at the scan's density (measured on the input tree only once a
   // replacement is weighed; a tree that cannot be sampled supports nothing).
-  const double tolerance = options.fitness.distanceTolerance * diagonal;
   const double gain = options.minGain * double(scan.size());
   out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
   double best = out.before.total - 2.0 * double(out.ghostBefore);  // less its ghosts' credit
-  std::optional<NearestNeighbors> nearest;
-  SupportOptions so;
-  so.distance = options.supportDistance * tolerance;
-  so.samples = options.supportSamples;
-  so.seed = options.evolve.seed;
-  const auto support = [&](const CsgTree& t) -> std::optional<SurfaceSupport> {
-    if (!nearest) nearest.emplace(scan.points);
-    try {
-      return surfaceSupport(t, *nearest, so);
-    } catch (const std::invalid_argument&) {
-      return std::nullopt;
-    }
-  };
-  std::optional<SurfaceSupport> bestSupport;
   const auto judge = [&](std::size_t k) {
     HybridRegion& h = found[k].report;
     if (!(h.localAfter > h.localBefore)) return RegionVerdict::NotImproved;
@@ -369,14 +504,12 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     const std::size_t ghosts = ghostPoints(scan, trial, ops, tolerance);
     const double score = f.total - 2.0 * double(ghosts);
     if (!(score > best + gain)) return RegionVerdict::Ghost;
-    if (!bestSupport) {
-      bestSupport = support(tree);
-      if (bestSupport) {
-        out.area = bestSupport->area;
-        out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
-      }
+    if (!bestSupport) bestSupport = support(tree, false);
+    if (bestSupport && out.area == 0.0) {
+      out.area = bestSupport->area;
+      out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
     }
-    const std::optional<SurfaceSupport> s = support(trial);
+    const std::optional<SurfaceSupport> s = support(trial, false);
     if (s) h.unsupported = s->unsupported;
     if (!bestSupport || !s) return RegionVerdict::Unsupported;
     const double density = double(scan.size()) / bestSupport->area;

@@ -3,20 +3,25 @@
 /// and the genetic search repairs it where the voxels could not see.
 ///
 /// Points the tree explains badly (farther than εd from its surface, or with
-/// a normal off by more than badAngle) are grouped into regions; the union
+/// a normal off by more than badAngle) are grouped into regions, and so are
+/// the samples of the tree's boundary no scan point is near (material or a
+/// hole the voxel stage kept where the part has none, which no point can
+/// call bad); the union
 /// members of the tree whose bounds meet a region (with the members meeting
 /// those, until none is added) are its subtree. Regions whose boxes meet
 /// (regions sharing a member do) are one. Each region's subtree is searched again by the genetic
 /// search, seeded with the subtree and its one-step variants (∪ or − one candidate), over the
 /// subtree's primitives and the bounded candidates that fit the region's points — including those
-/// the voxel stage dropped — with Eq. 7 on the points around it plus the voxel term there (min/max
-/// field by default: on clean scans SARDF gives the same fitness at several times the cost).
-/// Regions are independent, so they run in parallel. A refined subtree replaces the original only
-/// when the whole tree's fitness on all points improves (by more than minGain·N, so noise alone
-/// does not swap primitives) once the points it explains only by a zero set that bounds no volume
-/// are no longer credited (the min/max field of (A − X) ∪ (A ∩ X) is zero on X's surface inside A),
-/// and of the points the boundary it adds where the scan has no points would hold at the scan's
-/// density (a fitness at the points cannot see such surfaces: a slab carved inside a plate,
+/// the voxel stage dropped — and, where the boundary is unsupported, also seeded with the repairs
+/// the voxel labels ask for there (a candidate c, c − q or c ∩ q, q one of the subtree's
+/// primitives, taken away or added), with Eq. 7 on the points around it plus the voxel term there
+/// (min/max field by default: on clean scans SARDF gives the same fitness at several times the
+/// cost). Regions are independent, so they run in parallel. A refined subtree replaces the original
+/// only when the whole tree's fitness on all points improves (by more than minGain·N, so noise
+/// alone does not swap primitives) once the points it explains only by a zero set that bounds no
+/// volume are no longer credited (the min/max field of (A − X) ∪ (A ∩ X) is zero on X's surface
+/// inside A), and of the points the boundary it adds where the scan has no points would hold at the
+/// scan's density (a fitness at the points cannot see such surfaces: a slab carved inside a plate,
 /// thinner than a voxel); so the result is never worse than the voxel tree by that measure. Last,
 /// when a subtree was replaced, redundant nodes of the whole tree are removed. When none was, the
 /// result is the input tree itself.
@@ -62,6 +67,8 @@ struct HybridOptions {
   double supportDistance = 1.0;  ///< × εd: the tree's boundary farther than this from every point
                                  ///< is unsupported
   std::size_t supportSamples = 20000;  ///< boundary points sampled to measure the support
+  bool unsupportedRegions = true;      ///< the tree's boundary no point is near makes regions too
+  std::size_t maxRepairs = 16;  ///< seeds of such a region that set its voxels right, at most
 };
 
 /// What became of a region's refined subtree.
@@ -81,13 +88,14 @@ const char* regionVerdictName(RegionVerdict verdict);
 
 /// What refineTree() did in one region.
 struct HybridRegion {
-  std::size_t badPoints = 0;    ///< badly explained points that formed the region
-  std::size_t points = 0;       ///< points its search was judged on
-  std::size_t members = 0;      ///< union members of the tree in its subtree
-  std::size_t library = 0;      ///< primitives its search combined
-  std::size_t generations = 0;  ///< generations of its search
-  double localBefore = 0.0;     ///< the subtree's fitness on the region's points
-  double localAfter = 0.0;      ///< the search's best tree's
+  std::size_t badPoints = 0;     ///< badly explained points that formed the region
+  double unsupportedArea = 0.0;  ///< the tree's boundary no point is near that formed it (units²)
+  std::size_t points = 0;        ///< points its search was judged on
+  std::size_t members = 0;       ///< union members of the tree in its subtree
+  std::size_t library = 0;       ///< primitives its search combined
+  std::size_t generations = 0;   ///< generations of its search
+  double localBefore = 0.0;      ///< the subtree's fitness on the region's points
+  double localAfter = 0.0;       ///< the search's best tree's
   RegionVerdict verdict = RegionVerdict::NotImproved;  ///< why it went in or not
   /// The refined subtree went into the tree.
   bool replaced() const { return verdict == RegionVerdict::Replaced; }

@@ -146,6 +146,58 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
       << treeNodeJson(cut.tree);
 }
 
+// A block with a rounded end: the end box less a cylinder is cut away. The
+// voxel stage's tree cuts only the upper half of that (its candidates hold
+// no box of the lower corners alone), so the lower corners stay: material
+// the labels say is outside, bounded by faces no scan point is near, that
+// no candidate can take away on its own (the end box would take the round
+// with it). The refinement finds it by the unsupported boundary and repairs
+// it with the end box less the cylinder.
+TEST(Hybrid, TakesAwayMaterialThatNoPointBoundsWithACandidateLessAPrimitive) {
+  const Box block{Vec3::Zero(), Mat3::Identity(), Vec3(10, 6, 3)};
+  const Box end{Vec3(8, 0, 0), Mat3::Identity(), Vec3(2, 6.5, 3.5)};
+  const Box upperEnd{Vec3(8, 0, 1.75), Mat3::Identity(), Vec3(2, 6.5, 1.75)};
+  const Cylinder round{Vec3(6, 0, 0), Vec3::UnitY(), 3.0, 12.0};
+  const CsgTree roundLeaf = CsgTree::leaf(round, "round");
+  const CsgTree truth = CsgTree::subtract(
+      {CsgTree::leaf(block, "block"), CsgTree::subtract({CsgTree::leaf(end, "end"), roundLeaf})});
+  const CsgTree voxelTree =
+      CsgTree::subtract({CsgTree::leaf(block, "block"),
+                         CsgTree::subtract({CsgTree::leaf(upperEnd, "upper_end"), roundLeaf})});
+  std::vector<Candidate> candidates;
+  for (const CsgTree& t : {CsgTree::leaf(block, "block"), CsgTree::leaf(end, "end"),
+                           CsgTree::leaf(upperEnd, "upper_end"), roundLeaf}) {
+    Candidate c;
+    c.tree = t;
+    candidates.push_back(c);
+  }
+  SampleOptions so;
+  so.points = 30000;
+  const PointCloud scan = sampleSurface(truth, so).cloud;
+  const VoxelGrid grid =
+      VoxelGrid::around(OrientedBox{Vec3::Zero(), Mat3::Identity(), Vec3(10, 6, 3)});
+  const VoxelSet inside = solidVoxels(truth, grid);
+  const double before = volumetricIou(voxelTree, truth, 300);
+  ASSERT_LT(before, 0.99);
+
+  const HybridResult r = refineTree(scan, voxelTree, candidates, grid, inside);
+  ASSERT_FALSE(r.regions.empty());
+  EXPECT_GT(r.regions[0].unsupportedArea, 0.0);
+  EXPECT_EQ(r.replaced, 1u);
+  EXPECT_GT(r.unsupportedBefore, 10.0);  // the corners' bottom and end faces
+  EXPECT_LT(r.unsupportedAfter, 0.1 * r.unsupportedBefore);
+  EXPECT_GT(volumetricIou(r.tree, truth, 300), 0.999) << treeNodeJson(r.tree);
+  EXPECT_LE(r.primitivesAfter, 4u);
+
+  // Without the regions of unsupported boundary, only the points inside the
+  // corners (on the round's lower half) call for a repair, and the search
+  // over the same primitives does not find it.
+  HybridOptions off;
+  off.unsupportedRegions = false;
+  const HybridResult without = refineTree(scan, voxelTree, candidates, grid, inside, off);
+  EXPECT_LT(volumetricIou(without.tree, truth, 300), 0.999) << treeNodeJson(without.tree);
+}
+
 TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
   const SlotCase c = slotCase();
   const HybridResult same = refineTree(c.scan, c.truth, c.candidates, c.grid, c.inside);
