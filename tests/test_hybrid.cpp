@@ -130,6 +130,22 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
   // the plate's sides and the slot's edges, where points are near.
   EXPECT_GT(slabbed.unsupported, 1500.0);
   EXPECT_LT(slabbed.unsupported, 2 * 40 * 24 - 2 * 11 * 8);
+  // Kept, the unsupported samples are those the area counts, each farther
+  // than the distance from every scan point, and on the slab's faces.
+  SupportOptions keep = support;
+  keep.keepUnsupported = true;
+  const SurfaceSupport kept =
+      surfaceSupport(CsgTree::subtract({voxelTree, CsgTree::leaf(slab)}), nearest, keep);
+  EXPECT_DOUBLE_EQ(kept.unsupported, slabbed.unsupported);
+  EXPECT_TRUE(slabbed.unsupportedSamples.empty());
+  ASSERT_FALSE(kept.unsupportedSamples.empty());
+  EXPECT_NEAR(double(kept.unsupportedSamples.size()) * kept.sampleArea, kept.unsupported, 1e-6);
+  for (const Vec3& p : kept.unsupportedSamples) {
+    double d2 = 0.0;
+    nearest.nearest(p, &d2);
+    EXPECT_GT(std::sqrt(d2), support.distance);
+    EXPECT_NEAR(std::abs(p.z()), 0.25, 1e-6);
+  }
   const SurfaceSupport plain = surfaceSupport(voxelTree, nearest, support);
   EXPECT_NEAR(plain.area, 2 * (40 * 24 + 40 * 6 + 24 * 6), 60.0);
   EXPECT_LT(plain.unsupported, 0.01 * plain.area);
