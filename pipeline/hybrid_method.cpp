@@ -428,9 +428,18 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
       out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
       std::vector<Vec3> samples = std::move(bestSupport->unsupportedSamples);
       bestSupport->unsupportedSamples.clear();
+      // On a sparse scan, random gaps between points are wider than εd:
+      // only samples farther than a few mean spacings from every point form
+      // regions.
+      const double density = double(scan.size()) / bestSupport->area;
+      const double far = std::max(so.distance, options.supportSpacing / std::sqrt(density));
+      std::erase_if(samples, [&](const Vec3& p) {
+        double d2 = 0.0;
+        nearest->nearest(p, &d2);
+        return d2 <= far * far;
+      });
       std::vector<std::uint32_t> all(samples.size());
       for (std::size_t i = 0; i < all.size(); ++i) all[i] = std::uint32_t(i);
-      const double density = double(scan.size()) / bestSupport->area;
       for (const std::vector<std::uint32_t>& group :
            pointRegions(samples, all, options.regionCell * voxel)) {
         const double area = double(group.size()) * bestSupport->sampleArea;

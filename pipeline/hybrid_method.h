@@ -68,6 +68,10 @@ struct HybridOptions {
                                  ///< is unsupported
   std::size_t supportSamples = 20000;  ///< boundary points sampled to measure the support
   bool unsupportedRegions = true;      ///< the tree's boundary no point is near makes regions too
+  double supportSpacing = 1.5;  ///< × the scan's mean point spacing (√(boundary area / N)):
+                                ///< boundary nearer a point than this is not unsupported enough
+                                ///< to form a region (a random gap between points of a sparse
+                                ///< scan is wider than εd; one this wide is rarer than 1 in 1000)
   std::size_t maxRepairs = 16;  ///< seeds of such a region that set its voxels right, at most
 };
 
