@@ -22,12 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CommandOptions {
-  std::string scan;
-  std::string outDir;
+struct CommandOptions : ScanJobOptions {
   std::string methods = "voxel,hybrid,gp";
   std::vector<std::string> importGp;  // FIT EXPR
-  JobSettings job;
 };
 
 std::vector<std::string> splitMethods(const std::string& text) {

@@ -26,18 +26,8 @@ namespace csgvox::app {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-struct CommandOptions {
-  std::string scan;
-  std::string outDir;
-  JobSettings job;
-};
-
-}  // namespace
-
 Command setupReconstruct(CLI::App& app, CommonOptions& common) {
-  auto opt = std::make_shared<CommandOptions>();
+  auto opt = std::make_shared<ScanJobOptions>();
   // Show every default in --help.
   app.option_defaults()->always_capture_default();
   app.add_option("SCAN", opt->scan,

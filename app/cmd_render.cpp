@@ -6,6 +6,7 @@
 #include "app/commands.h"
 #include "app/console.h"
 #include "app/options.h"
+#include "app/tree_command.h"
 #include "cad/step_export.h"
 #include "io/csg_writer.h"
 #include "io/errors.h"
@@ -53,10 +54,7 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
       ->check(inRange(64, 4096));
   return [opt, &common]() -> int {
     Console console(common.quiet);
-    common.subject = opt->tree;
-    const CsgTree tree = readTreeJson(std::filesystem::path(opt->tree));
-    const std::string ext = lowerExtension(opt->output);
-    requireNotInput(opt->output, opt->tree);
+    const auto [tree, ext] = readTreeCommand(common, opt->tree, opt->output);
     Stopwatch watch;
     if (ext == "ply" || ext == "stl" || ext == "obj") {
       MeshOptions mo;

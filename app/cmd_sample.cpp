@@ -5,10 +5,9 @@
 #include "app/commands.h"
 #include "app/console.h"
 #include "app/options.h"
+#include "app/tree_command.h"
 #include "io/errors.h"
-#include "io/file_util.h"
 #include "io/point_writer.h"
-#include "io/tree_json.h"
 #include "mesh/surface_sampler.h"
 
 namespace csgvox::app {
@@ -45,10 +44,7 @@ Command setupSample(CLI::App& app, CommonOptions& common) {
   app.add_flag("--ascii", opt->ascii, "Write ASCII PLY instead of binary");
   return [opt, &common]() -> int {
     Console console(common.quiet);
-    common.subject = opt->tree;
-    const CsgTree tree = readTreeJson(std::filesystem::path(opt->tree));
-    const std::string ext = lowerExtension(opt->output);
-    requireNotInput(opt->output, opt->tree);
+    const auto [tree, ext] = readTreeCommand(common, opt->tree, opt->output);
     if (ext != "ply" && ext != "xyz" && ext != "xyzn") {
       throw IoError(opt->output + ": unsupported output format (use .ply or .xyz)");
     }

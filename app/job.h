@@ -29,6 +29,14 @@ struct JobSettings {
   bool preview = true;  ///< write preview.png
 };
 
+/// The command line of a command that reconstructs one scan (the main job,
+/// `compare`).
+struct ScanJobOptions {
+  std::string scan;    ///< the scan's path
+  std::string outDir;  ///< -o: the output folder (empty: beside the scan)
+  JobSettings job;     ///< how to reconstruct it
+};
+
 /// Registers every reconstruction option (all but the scan and the output).
 void addJobOptions(CLI::App& app, JobSettings& settings);
 

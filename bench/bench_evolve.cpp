@@ -19,6 +19,7 @@
 #include "evolve/fitness.h"
 #include "evolve/genetic_search.h"
 #include "evolve/tree_variation.h"
+#include "tests/evolve_fixtures.h"
 
 using namespace csgvox;
 
@@ -48,24 +49,9 @@ void boxScan(std::size_t n, std::vector<Vec3>& points, std::vector<Vec3>& normal
 
 // The box's six planes and a few distractors.
 PrimitiveLibrary boxLibrary() {
-  std::vector<Primitive> primitives;
-  std::vector<std::string> names;
-  for (int axis = 0; axis < 3; ++axis) {
-    for (const double side : {-1.0, 1.0}) {
-      Vec3 n = Vec3::Zero();
-      n[axis] = side;
-      primitives.push_back(HalfSpace{n, 1.0});
-      names.push_back("plane" + std::to_string(names.size()));
-    }
-  }
-  primitives.push_back(Sphere{Vec3(1, 1, 1), 0.5});
-  primitives.push_back(Cylinder{Vec3::Zero(), Vec3::UnitZ(), 0.3, 4.0});
-  primitives.push_back(HalfSpace{Vec3(1, 1, 0).normalized(), 1.2});
-  primitives.push_back(Sphere{Vec3::Zero(), 1.5});
-  for (std::size_t i = names.size(); i < primitives.size(); ++i) {
-    names.push_back("extra" + std::to_string(i));
-  }
-  return PrimitiveLibrary(std::move(primitives), std::move(names));
+  return test::cubePlanes({Sphere{Vec3(1, 1, 1), 0.5},
+                           Cylinder{Vec3::Zero(), Vec3::UnitZ(), 0.3, 4.0},
+                           HalfSpace{Vec3(1, 1, 0).normalized(), 1.2}, Sphere{Vec3::Zero(), 1.5}});
 }
 
 void fitnessRate(std::size_t n, SetOperationKind ops, const char* name, bool quick) {

@@ -175,6 +175,16 @@ struct TreeParameters::Data {
       m.blocks.push_back(block);
       return int(m.blocks.size()) - 1;
     };
+    // A solid of revolution with caps: its axis's direction and line, and
+    // the offsets of its two caps along the axis.
+    const auto axial = [&](const Vec3& axis, const Vec3& center, double height) {
+      const int k = m.cls[0] = classOf(axis, m.sign[0]);
+      m.rotation = local(rotationBlock(k));
+      m.line = local(lineBlock(k, center));
+      const double mid = along(k, center);
+      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * height, -polarity));
+      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * height, polarity));
+    };
     if (const auto* h = p.as<HalfSpace>()) {
       const int k = m.cls[0] = classOf(h->normal, m.sign[0]);
       m.rotation = local(rotationBlock(k));
@@ -191,20 +201,10 @@ struct TreeParameters::Data {
         m.face[i][1] = local(offsetBlock(m.cls[i], mid + b->halfSize[int(i)], polarity));
       }
     } else if (const auto* c = p.as<Cylinder>()) {
-      const int k = m.cls[0] = classOf(c->axis, m.sign[0]);
-      m.rotation = local(rotationBlock(k));
-      m.line = local(lineBlock(k, c->center));
-      const double mid = along(k, c->center);
-      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * c->height, -polarity));
-      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * c->height, polarity));
+      axial(c->axis, c->center, c->height);
       m.radius[0] = local(radiusBlock(c->radius));
     } else if (const auto* c = p.as<Cone>()) {
-      const int k = m.cls[0] = classOf(c->axis, m.sign[0]);
-      m.rotation = local(rotationBlock(k));
-      m.line = local(lineBlock(k, c->center));
-      const double mid = along(k, c->center);
-      m.face[0][0] = local(offsetBlock(k, mid - 0.5 * c->height, -polarity));
-      m.face[0][1] = local(offsetBlock(k, mid + 0.5 * c->height, polarity));
+      axial(c->axis, c->center, c->height);
       m.radius[0] = local(radiusBlock(c->radiusBottom));
       m.radius[1] = local(radiusBlock(c->radiusTop));
     } else if (const auto* s = p.as<Sphere>()) {
