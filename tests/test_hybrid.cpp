@@ -204,6 +204,11 @@ TEST(Hybrid, TakesAwayMaterialThatNoPointBoundsWithACandidateLessAPrimitive) {
   EXPECT_LT(r.unsupportedAfter, 0.1 * r.unsupportedBefore);
   EXPECT_GT(volumetricIou(r.tree, truth, 300), 0.999) << treeNodeJson(r.tree);
   EXPECT_LE(r.primitivesAfter, 4u);
+  {  // the same tree with one thread
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    EXPECT_TRUE(
+        refineTree(scan, voxelTree, candidates, grid, inside).tree.structurallyEqual(r.tree));
+  }
 
   // Without the regions of unsupported boundary, only the points inside the
   // corners (on the round's lower half) call for a repair, and the search
