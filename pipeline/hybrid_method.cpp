@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -111,6 +110,31 @@ void selectMembers(Region& region, std::span<const Aabb> memberBounds) {
   region.members.clear();
   for (std::size_t m = 0; m < taken.size(); ++m)
     if (taken[m]) region.members.push_back(m);
+}
+
+// Regions of unsupported boundary: `samples` (each standing for `sampleArea`
+// of it) grouped as bad points are, each group kept when the area it stands
+// for would hold `least` points at `density`, in a box grown by `margin`.
+std::vector<Region> boundaryRegions(std::span<const Vec3> samples, double sampleArea,
+                                    double density, double least, double cell, double margin,
+                                    std::span<const Aabb> memberBounds) {
+  std::vector<std::uint32_t> all(samples.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = std::uint32_t(i);
+  std::vector<Region> out;
+  for (const std::vector<std::uint32_t>& group : pointRegions(samples, all, cell)) {
+    const double area = double(group.size()) * sampleArea;
+    if (area * density < least) continue;
+    Region r;
+    for (const std::uint32_t i : group) {
+      r.unsupported.push_back(samples[i]);
+      r.box.extend(samples[i]);
+    }
+    r.unsupportedArea = area;
+    r.box = r.box.grown(margin);
+    selectMembers(r, memberBounds);
+    out.push_back(std::move(r));
+  }
+  return out;
 }
 
 // Regions whose boxes meet become one (in order of their first point): a
@@ -438,22 +462,9 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
         nearest->nearest(p, &d2);
         return d2 <= far * far;
       });
-      std::vector<std::uint32_t> all(samples.size());
-      for (std::size_t i = 0; i < all.size(); ++i) all[i] = std::uint32_t(i);
-      for (const std::vector<std::uint32_t>& group :
-           pointRegions(samples, all, options.regionCell * voxel)) {
-        const double area = double(group.size()) * bestSupport->sampleArea;
-        if (area * density < double(least)) continue;
-        Region r;
-        for (const std::uint32_t i : group) {
-          r.unsupported.push_back(samples[i]);
-          r.box.extend(samples[i]);
-        }
-        r.unsupportedArea = area;
-        r.box = r.box.grown(margin);
-        selectMembers(r, memberBounds);
+      for (Region& r : boundaryRegions(samples, bestSupport->sampleArea, density, double(least),
+                                       options.regionCell * voxel, margin, memberBounds))
         regions.push_back(std::move(r));
-      }
     }
   }
   regions = joinMeetingRegions(std::move(regions), memberBounds);
@@ -499,8 +510,9 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   // A replacement is judged by the fitness less the credit (a distance and a
   // normal term) of the points explained only by ghost surfaces, then less
   // that of the points the boundary it adds where the scan has none would
-  // hold at the scan's density (measured on the input tree only once a
-  // replacement is weighed; a tree that cannot be sampled supports nothing).
+  // hold at the scan's density (the input tree's support is measured above,
+  // or once a replacement is weighed; a tree that cannot be sampled supports
+  // nothing).
   const double gain = options.minGain * double(scan.size());
   out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
   double best = out.before.total - 2.0 * double(out.ghostBefore);  // less its ghosts' credit
