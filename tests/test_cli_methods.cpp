@@ -38,10 +38,11 @@ TEST_F(Cli, GpFindsTheExactCubeAndIsSeeded) {
 }
 
 TEST_F(Cli, GpKeepsItsBestTreeAtTheTimeLimit) {
-  const RunResult r =
-      run(kCube + " --method gp -q --stall 0 --generations 100000 --time-limit 3 -o " +
-              (dir_ / "t").string(),
-          dir_, 120);
+  // Long enough for detection, also in a sanitised build.
+  const int limit = 3 * CSGVOX_TEST_SLOWDOWN;
+  const RunResult r = run(kCube + " --method gp -q --stall 0 --generations 100000 --time-limit " +
+                              std::to_string(limit) + " -o " + (dir_ / "t").string(),
+                          dir_, 40 * limit);
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json report = readJson(dir_ / "t" / "report.json");
   EXPECT_EQ(report["counts"]["stop"], "time_limit");
