@@ -6,7 +6,8 @@
 // volumetric IoU between the tree and the mesh's solid.
 //
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
-//        [--models 011,039,...] [--samples S] [--time-limit T] [--keep OUTDIR]
+//        [--models 011,039,...] [--samples S] [--time-limit T] [--no-refine-thin]
+//        [--no-unsupported-regions] [--keep OUTDIR]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -50,6 +51,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/statistics.h"
@@ -138,19 +140,19 @@ std::map<std::string, Reference> readReferences(const std::filesystem::path& csv
 
 // Volumetric IoU of two solids on uniform random points of `box`, and where
 // they differ: the volume only in A and only in B, as fractions of B's.
+// With `only`, the samples in A only and in B only are kept there.
 struct Overlap {
   double iou = 1.0;
   double onlyA = 0.0;
   double onlyB = 0.0;
-  PointCloud samplesOnlyA, samplesOnlyB;  // the samples themselves
 };
 
 template <class InA, class InB>
-Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed) {
+Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::uint64_t seed,
+                       std::pair<PointCloud, PointCloud>* only = nullptr) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::size_t both = 0, onlyA = 0, onlyB = 0;
-  std::vector<Vec3> samplesA, samplesB;
   for (int i = 0; i < samples; ++i) {
     Vec3 p;
     for (int k = 0; k < 3; ++k) p[k] = box.min[k] + unit(rng) * (box.max[k] - box.min[k]);
@@ -158,12 +160,9 @@ Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::
     both += a && b;
     onlyA += a && !b;
     onlyB += b && !a;
-    if (a && !b) samplesA.push_back(p);
-    if (b && !a) samplesB.push_back(p);
+    if (only && a != b) (a ? only->first : only->second).points.push_back(p);
   }
   Overlap o;
-  o.samplesOnlyA.points = std::move(samplesA);
-  o.samplesOnlyB.points = std::move(samplesB);
   const std::size_t either = both + onlyA + onlyB, inB_ = both + onlyB;
   if (either > 0) o.iou = double(both) / double(either);
   if (inB_ > 0) {
@@ -231,17 +230,19 @@ Result runModel(const Options& opt, const std::string& model) {
       box = box.grown(0.1 * meshBox.diagonal());
       res.note = "unbounded tree; " + res.note;
     }
+    std::pair<PointCloud, PointCloud> only;  // extra, missing
     const Overlap o = sampledOverlap(
         box, [&](const Vec3& p) { return rec.tree.contains(p); },
-        [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1);
+        [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1,
+        keep.empty() ? nullptr : &only);
     res.iou = o.iou;
     char where[96];
     std::snprintf(where, sizeof where, "; extra %.1f %%, missing %.1f %% of the part's volume",
                   100.0 * o.onlyA, 100.0 * o.onlyB);
     res.note += where;
     if (!keep.empty()) {
-      writePointCloudPly(keep / "extra.ply", o.samplesOnlyA);
-      writePointCloudPly(keep / "missing.ply", o.samplesOnlyB);
+      writePointCloudPly(keep / "extra.ply", only.first);
+      writePointCloudPly(keep / "missing.ply", only.second);
     }
   } catch (const std::exception& e) {
     if (res.seconds < 0.0) res.status = "error";
@@ -372,7 +373,7 @@ int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin] "
-               "[--keep OUTDIR]\n",
+               "[--no-unsupported-regions] [--keep OUTDIR]\n",
                argv0);
   return 2;
 }

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "mesh/surface_sampler.h"
@@ -18,19 +19,19 @@ SurfaceSupport surfaceSupport(const CsgTree& tree, const NearestNeighbors& scan,
   const SurfaceSample s = sampleSurface(tree, so);
   const double limit = options.distance * options.distance;
   const std::vector<Vec3>& p = s.cloud.points;
-  std::vector<char> far(p.size(), 0);
-  tbb::parallel_for(std::size_t{0}, p.size(), [&](std::size_t i) {
-    double d2 = 0.0;
-    scan.nearest(p[i], &d2);
-    far[i] = d2 > limit;
-  });
+  std::vector<double> d2(p.size(), 0.0);  // squared distance to the nearest scan point
+  tbb::parallel_for(std::size_t{0}, p.size(), [&](std::size_t i) { scan.nearest(p[i], &d2[i]); });
   SurfaceSupport out;
   out.area = s.surfaceArea;
   out.sampleArea = s.surfaceArea / double(p.size());
-  out.unsupported = out.sampleArea * double(std::count(far.begin(), far.end(), 1));
+  out.unsupported = out.sampleArea * double(std::count_if(d2.begin(), d2.end(),
+                                                          [&](double d) { return d > limit; }));
   if (options.keepUnsupported) {
-    for (std::size_t i = 0; i < p.size(); ++i)
-      if (far[i]) out.unsupportedSamples.push_back(p[i]);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (d2[i] <= limit) continue;
+      out.unsupportedSamples.push_back(p[i]);
+      out.unsupportedDistances.push_back(std::sqrt(d2[i]));
+    }
   }
   return out;
 }

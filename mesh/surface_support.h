@@ -29,6 +29,7 @@ struct SurfaceSupport {
   double unsupported = 0.0;  ///< estimated area farther than the distance from every scan point
   double sampleArea = 0.0;   ///< boundary area each sample stands for
   std::vector<Vec3> unsupportedSamples;  ///< with keepUnsupported: those samples, in sample order
+  std::vector<double> unsupportedDistances;  ///< and each one's distance to the nearest scan point
 };
 
 /// Samples the boundary of `tree` uniformly and measures the area whose

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -88,8 +89,7 @@ std::size_t ghostPoints(const PointCloud& scan, const CsgTree& tree, const SetOp
 // the tree (indices) its subtree is made of.
 struct Region {
   std::vector<std::uint32_t> bad;
-  std::vector<Vec3> unsupported;  // samples of the tree's boundary no scan point is near
-  double unsupportedArea = 0.0;   // the boundary area they stand for
+  double unsupportedArea = 0.0;  // the tree's boundary in it no scan point is near
   Aabb box;
   std::vector<std::size_t> members;
 };
@@ -125,10 +125,7 @@ std::vector<Region> boundaryRegions(std::span<const Vec3> samples, double sample
     const double area = double(group.size()) * sampleArea;
     if (area * density < least) continue;
     Region r;
-    for (const std::uint32_t i : group) {
-      r.unsupported.push_back(samples[i]);
-      r.box.extend(samples[i]);
-    }
+    for (const std::uint32_t i : group) r.box.extend(samples[i]);
     r.unsupportedArea = area;
     r.box = r.box.grown(margin);
     selectMembers(r, memberBounds);
@@ -149,8 +146,6 @@ std::vector<Region> joinMeetingRegions(std::vector<Region> regions,
         if (!meets(regions[a].box, regions[b].box)) continue;
         regions[a].bad.insert(regions[a].bad.end(), regions[b].bad.begin(), regions[b].bad.end());
         std::sort(regions[a].bad.begin(), regions[a].bad.end());
-        regions[a].unsupported.insert(regions[a].unsupported.end(), regions[b].unsupported.begin(),
-                                      regions[b].unsupported.end());
         regions[a].unsupportedArea += regions[b].unsupportedArea;
         regions[a].box.extend(regions[b].box);
         selectMembers(regions[a], memberBounds);
@@ -187,41 +182,43 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
                                  std::span<const Candidate> candidates, const VoxelGrid& grid,
                                  const VoxelSet& inside, std::size_t count) {
   const CsgTree boxLeaf = CsgTree::leaf(Box{box.center(), Mat3::Identity(), 0.5 * box.size()});
-  const VoxelSet inBox = solidVoxels(boxLeaf, grid);
+  const VoxelSet inBox = voxelsIn(grid, box);
   const VoxelSet solid = solidVoxels(subtree, grid) & inBox;
-  const VoxelSet wrong = solid - inside;  // material the labels say is outside
-  const VoxelSet right = solid & inside;  // material the labels agree with
-  const VoxelSet missing = (inside & inBox) - solid;
-  const VoxelSet empty = inBox - solid - inside;
-  std::vector<VoxelSet> leaves;
-  for (const Node* leaf : subtree.leaves())
-    leaves.push_back(
-        solidVoxels(CsgTree::intersect({CsgTree::leaf(leaf->primitive), boxLeaf}), grid));
+  // The box's voxels by what the subtree and the labels say: material the
+  // labels say is outside (wrong), material they agree with (right), labelled
+  // inside but not in the subtree (missing), neither (empty); each also
+  // within each of the subtree's leaves.
+  enum { kWrong, kRight, kMissing, kEmpty };
+  const std::array<VoxelSet, 4> kinds = {solid - inside, solid & inside, (inside & inBox) - solid,
+                                         inBox - solid - inside};
+  std::vector<std::array<VoxelSet, 4>> inLeaf;
+  for (const Node* leaf : subtree.leaves()) {
+    const VoxelSet q =
+        solidVoxels(CsgTree::intersect({CsgTree::leaf(leaf->primitive), boxLeaf}), grid);
+    inLeaf.push_back({q & kinds[0], q & kinds[1], q & kinds[2], q & kinds[3]});
+  }
   using Index = std::ptrdiff_t;
-  const auto n = [](const VoxelSet& a, const VoxelSet& b) {
-    return Index(VoxelSet::countAnd(a, b));
-  };
   std::vector<Repair> out;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     if (!meets(candidates[c].tree.bounds(), box)) continue;
     const VoxelSet v = solidVoxels(CsgTree::intersect({candidates[c].tree, boxLeaf}), grid);
     if (v.count() == 0) continue;
-    const VoxelSet vWrong = v & wrong, vRight = v & right, vMissing = v & missing,
-                   vEmpty = v & empty;
-    const Index w = Index(vWrong.count()), r = Index(vRight.count());
-    const Index m = Index(vMissing.count()), e = Index(vEmpty.count());
+    std::array<Index, 4> all;  // v's voxels of each kind
+    for (int k = 0; k < 4; ++k)
+      all[std::size_t(k)] = Index(VoxelSet::countAnd(v, kinds[std::size_t(k)]));
     const auto consider = [&](Index gain, Index leaf, bool intersect, bool cut) {
       if (gain >= kLeastRepair) out.push_back({gain, c, leaf, intersect, cut});
     };
-    consider(w - r, -1, false, true);
-    consider(m - e, -1, false, false);
-    for (std::size_t l = 0; l < leaves.size(); ++l) {
-      const Index wq = n(vWrong, leaves[l]), rq = n(vRight, leaves[l]);
-      const Index mq = n(vMissing, leaves[l]), eq = n(vEmpty, leaves[l]);
-      consider((w - wq) - (r - rq), Index(l), false, true);
-      consider(wq - rq, Index(l), true, true);
-      consider((m - mq) - (e - eq), Index(l), false, false);
-      consider(mq - eq, Index(l), true, false);
+    consider(all[kWrong] - all[kRight], -1, false, true);
+    consider(all[kMissing] - all[kEmpty], -1, false, false);
+    for (std::size_t l = 0; l < inLeaf.size(); ++l) {
+      std::array<Index, 4> q;  // v's voxels of each kind within leaf l
+      for (int k = 0; k < 4; ++k)
+        q[std::size_t(k)] = Index(VoxelSet::countAnd(v, inLeaf[l][std::size_t(k)]));
+      consider((all[kWrong] - q[kWrong]) - (all[kRight] - q[kRight]), Index(l), false, true);
+      consider(q[kWrong] - q[kRight], Index(l), true, true);
+      consider((all[kMissing] - q[kMissing]) - (all[kEmpty] - q[kEmpty]), Index(l), false, false);
+      consider(q[kMissing] - q[kEmpty], Index(l), true, false);
     }
   }
   std::stable_sort(out.begin(), out.end(),
@@ -279,7 +276,7 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   // labels less those it sets wrong. The best become seeds, their
   // candidates join the library.
   std::vector<Repair> repairs;
-  if (!region.unsupported.empty())
+  if (region.unsupportedArea > 0.0)
     repairs = voxelRepairs(out.subtree, region.box, candidates, grid, inside, options.maxRepairs);
   std::vector<std::pair<std::size_t, std::size_t>> picked;  // the repairs' candidates first
   for (const Repair& r : repairs) {
@@ -444,28 +441,24 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
       return std::nullopt;
     }
   };
-  std::optional<SurfaceSupport> bestSupport;
-  if (options.unsupportedRegions) {
-    bestSupport = support(tree, true);
-    if (bestSupport && bestSupport->area > 0.0) {
-      out.area = bestSupport->area;
-      out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
-      std::vector<Vec3> samples = std::move(bestSupport->unsupportedSamples);
-      bestSupport->unsupportedSamples.clear();
-      // On a sparse scan, random gaps between points are wider than εd:
-      // only samples farther than a few mean spacings from every point form
-      // regions.
-      const double density = double(scan.size()) / bestSupport->area;
-      const double far = std::max(so.distance, options.supportSpacing / std::sqrt(density));
-      std::erase_if(samples, [&](const Vec3& p) {
-        double d2 = 0.0;
-        nearest->nearest(p, &d2);
-        return d2 <= far * far;
-      });
-      for (Region& r : boundaryRegions(samples, bestSupport->sampleArea, density, double(least),
-                                       options.regionCell * voxel, margin, memberBounds))
-        regions.push_back(std::move(r));
-    }
+  // The input tree's support, which also weighs every replacement below.
+  std::optional<SurfaceSupport> bestSupport = support(tree, options.unsupportedRegions);
+  if (bestSupport) {
+    out.area = bestSupport->area;
+    out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
+  }
+  if (bestSupport && bestSupport->area > 0.0 && options.unsupportedRegions) {
+    // On a sparse scan, random gaps between points are wider than εd: only
+    // samples farther than a few mean spacings from every point form regions.
+    const double density = double(scan.size()) / bestSupport->area;
+    const double far = std::max(so.distance, options.supportSpacing / std::sqrt(density));
+    std::vector<Vec3> samples;
+    for (std::size_t i = 0; i < bestSupport->unsupportedSamples.size(); ++i)
+      if (bestSupport->unsupportedDistances[i] > far)
+        samples.push_back(bestSupport->unsupportedSamples[i]);
+    for (Region& r : boundaryRegions(samples, bestSupport->sampleArea, density, double(least),
+                                     options.regionCell * voxel, margin, memberBounds))
+      regions.push_back(std::move(r));
   }
   regions = joinMeetingRegions(std::move(regions), memberBounds);
 
@@ -510,8 +503,7 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   // A replacement is judged by the fitness less the credit (a distance and a
   // normal term) of the points explained only by ghost surfaces, then less
   // that of the points the boundary it adds where the scan has none would
-  // hold at the scan's density (the input tree's support is measured above,
-  // or once a replacement is weighed; a tree that cannot be sampled supports
+  // hold at the scan's density (a tree that cannot be sampled supports
   // nothing).
   const double gain = options.minGain * double(scan.size());
   out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
@@ -525,11 +517,6 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     const std::size_t ghosts = ghostPoints(scan, trial, ops, tolerance);
     const double score = f.total - 2.0 * double(ghosts);
     if (!(score > best + gain)) return RegionVerdict::Ghost;
-    if (!bestSupport) bestSupport = support(tree, false);
-    if (bestSupport && out.area == 0.0) {
-      out.area = bestSupport->area;
-      out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
-    }
     const std::optional<SurfaceSupport> s = support(trial, false);
     if (s) h.unsupported = s->unsupported;
     if (!bestSupport || !s) return RegionVerdict::Unsupported;

@@ -140,10 +140,13 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
   EXPECT_TRUE(slabbed.unsupportedSamples.empty());
   ASSERT_FALSE(kept.unsupportedSamples.empty());
   EXPECT_NEAR(double(kept.unsupportedSamples.size()) * kept.sampleArea, kept.unsupported, 1e-6);
-  for (const Vec3& p : kept.unsupportedSamples) {
+  ASSERT_EQ(kept.unsupportedDistances.size(), kept.unsupportedSamples.size());
+  for (std::size_t i = 0; i < kept.unsupportedSamples.size(); ++i) {
+    const Vec3& p = kept.unsupportedSamples[i];
     double d2 = 0.0;
     nearest.nearest(p, &d2);
     EXPECT_GT(std::sqrt(d2), support.distance);
+    EXPECT_DOUBLE_EQ(kept.unsupportedDistances[i], std::sqrt(d2));
     EXPECT_NEAR(std::abs(p.z()), 0.25, 1e-6);
   }
   const SurfaceSupport plain = surfaceSupport(voxelTree, nearest, support);
