@@ -171,9 +171,16 @@ int runOptimisation(const CsgTree& part, std::size_t points, int repeats) {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
+  if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf(
+        "usage: %s [TREE.json] [NOISE]\n"
+        "       %s --optimisation [TREE.json] [POINTS] [REPEATS] [THREADS]\n"
+        "TREE.json: the part to sample (default data/housing_complex/tree.json); NOISE: "
+        "Gaussian position noise, sigma as a fraction of D\n",
+        argv[0], argv[0]);
+    return 0;
+  }
   if (argc > 1 && std::string(argv[1]) == "--optimisation") {
     const std::string path =
         argc > 2 ? argv[2] : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
@@ -237,4 +244,15 @@ int main(int argc, char** argv) {
     }
   }
   return failures == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", argv[0], e.what());
+    return 1;
+  }
 }
