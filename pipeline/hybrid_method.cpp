@@ -195,7 +195,8 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
   for (const Node* leaf : subtree.leaves()) {
     const VoxelSet q =
         solidVoxels(CsgTree::intersect({CsgTree::leaf(leaf->primitive), boxLeaf}), grid);
-    inLeaf.push_back({q & kinds[0], q & kinds[1], q & kinds[2], q & kinds[3]});
+    inLeaf.push_back(
+        {q & kinds[kWrong], q & kinds[kRight], q & kinds[kMissing], q & kinds[kEmpty]});
   }
   using Index = std::ptrdiff_t;
   std::vector<Repair> out;
@@ -204,8 +205,7 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
     const VoxelSet v = solidVoxels(CsgTree::intersect({candidates[c].tree, boxLeaf}), grid);
     if (v.count() == 0) continue;
     std::array<Index, 4> all;  // v's voxels of each kind
-    for (int k = 0; k < 4; ++k)
-      all[std::size_t(k)] = Index(VoxelSet::countAnd(v, kinds[std::size_t(k)]));
+    for (std::size_t k = 0; k < kinds.size(); ++k) all[k] = Index(VoxelSet::countAnd(v, kinds[k]));
     const auto consider = [&](Index gain, Index leaf, bool intersect, bool cut) {
       if (gain >= kLeastRepair) out.push_back({gain, c, leaf, intersect, cut});
     };
@@ -213,8 +213,8 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
     consider(all[kMissing] - all[kEmpty], -1, false, false);
     for (std::size_t l = 0; l < inLeaf.size(); ++l) {
       std::array<Index, 4> q;  // v's voxels of each kind within leaf l
-      for (int k = 0; k < 4; ++k)
-        q[std::size_t(k)] = Index(VoxelSet::countAnd(v, inLeaf[l][std::size_t(k)]));
+      for (std::size_t k = 0; k < kinds.size(); ++k)
+        q[k] = Index(VoxelSet::countAnd(v, inLeaf[l][k]));
       consider((all[kWrong] - q[kWrong]) - (all[kRight] - q[kRight]), Index(l), false, true);
       consider(q[kWrong] - q[kRight], Index(l), true, true);
       consider((all[kMissing] - q[kMissing]) - (all[kEmpty] - q[kEmpty]), Index(l), false, false);
