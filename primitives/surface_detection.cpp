@@ -565,6 +565,9 @@ void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surfac
   // the final refinement: the later passes search the unassigned points
   // for new surfaces, and stray noise is no help there.
   settle.connectedPatches = false;
+  // The passes keep the surfaces as RANSAC found them; the final refinement
+  // turns the flattened ones into planes.
+  settle.flattenToPlanes = false;
   refineSurfaces(cloud, result, settle);
   found = std::move(result.surfaces);
   result.surfaces.clear();

@@ -23,10 +23,32 @@ namespace {
 
 using namespace refinement_detail;
 
+// True when a curved surface has flattened into a plane on a part of
+// diagonal D: a cylinder or sphere of radius beyond D, a cone opening to
+// within two degrees of flat. (A part's straight side that RANSAC took as a
+// wide cylinder together with a strip of the round next to it fits so once
+// the round's points go to the round.)
+bool flattened(const Surface& s, double diag) {
+  switch (s.type()) {
+    case SurfaceType::Cylinder:
+      return s.as<CylinderSurface>()->radius > diag;
+    case SurfaceType::Sphere:
+      return s.as<SphereSurface>()->radius > diag;
+    case SurfaceType::Cone:
+      return s.as<ConeSurface>()->halfAngle > 0.5 * std::numbers::pi - 2.0 * std::numbers::pi / 180.0;
+    case SurfaceType::Plane:
+    case SurfaceType::Torus:
+      return false;
+  }
+  return false;
+}
+
 // Fits every surface on its inliers (in parallel); surfaces whose fit
-// degenerates keep their parameters.
+// degenerates keep their parameters, and (options.flattenToPlanes) a curved
+// surface whose fit has flattened becomes the plane of its inliers.
 void fitAll(const PointCloud& cloud, DetectionResult& result, const RefineOptions& options) {
   const FitScales scales = fitScales(result, options);
+  const double diag = result.diagonal;
   // One task per surface: the fits differ widely in cost (largest surfaces first).
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, result.surfaces.size(), 1),
@@ -36,6 +58,13 @@ void fitAll(const PointCloud& cloud, DetectionResult& result, const RefineOption
           Surface trial = surf;
           if (fitSurface(cloud, surf.inliers, trial, scales, options) >= 0.0)
             surf = std::move(trial);
+          Surface plane;
+          if (options.flattenToPlanes && diag > 0.0 && flattened(surf, diag) &&
+              initialSurface(cloud, surf.inliers, SurfaceType::Plane, plane) &&
+              fitSurface(cloud, surf.inliers, plane, scales, options) >= 0.0) {
+            plane.inliers = std::move(surf.inliers);
+            surf = std::move(plane);
+          }
         }
       },
       tbb::simple_partitioner());

@@ -28,6 +28,9 @@ struct RefineOptions {
   bool removeRedundant = true;     ///< drop surfaces whose points other surfaces explain as well
   double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least
                                    ///< this share of its inliers (fraction)
+  bool flattenToPlanes = true;     ///< a cylinder or sphere whose fitted radius exceeds the
+                                   ///< diagonal D, or a cone within 2 degrees of flat, becomes
+                                   ///< the plane of its inliers
 };
 
 /// Residual scales of one fit: each point contributes its orthogonal distance

@@ -432,6 +432,44 @@ TEST(SurfaceRefinement, FitsAnExactCylinderFromARoughStart) {
   EXPECT_TRUE(s.convex);
 }
 
+// A lug's flat side that detection took as a wide cylinder (together with a
+// strip of the round next to it) is a plane once only its own points are
+// left: the refinement gives the plane, not a cylinder of radius far beyond
+// the part, which no bounded box could use.
+TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
+  Rng rng(11);
+  const Mat3 frame = randomRotation(rng);
+  const Vec3 normal = frame.col(0), offsetPoint = Vec3(1, 2, 3) + 0.83 * normal;
+  PointCloud cloud;
+  for (int i = 0; i < 600; ++i) {
+    const double u = uniform(rng, 0.0, 3.0), v = uniform(rng, -1.5, 1.5);
+    cloud.points.push_back(offsetPoint + u * frame.col(1) + v * frame.col(2));
+    cloud.normals.push_back(normal);
+  }
+  DetectionResult result;
+  result.diagonal = 5.0;  // the part the side belongs to
+  result.epsilon = 0.025;
+  result.clusterEpsilon = 0.2;
+  result.minPoints = 50;
+  result.status = DetectionResult::Status::Ok;
+  Surface wide;
+  // Radius 4, bent away from the points' plane by up to 0.28 at the patch ends.
+  wide.shape = CylinderSurface{offsetPoint - 4.0 * normal + 1.5 * frame.col(1), frame.col(2), 4.0};
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) wide.inliers.push_back(i);
+  result.surfaces.push_back(wide);
+  result.assignment.assign(cloud.size(), 0);
+
+  refineSurfaces(cloud, result);
+  ASSERT_EQ(result.surfaces.size(), 1u);
+  const Surface& s = result.surfaces[0];
+  ASSERT_EQ(s.type(), SurfaceType::Plane) << describe(s);
+  EXPECT_EQ(s.inliers.size(), cloud.size());
+  const auto& p = *s.as<PlaneSurface>();
+  EXPECT_GT(p.normal.dot(normal), 1.0 - 1e-9);
+  EXPECT_NEAR(p.normal.dot(offsetPoint), p.offset, 1e-9);
+  EXPECT_LT(s.rms, 1e-9);
+}
+
 // ---------------------------------------------------------------------------
 // Determinism, progress, degenerate input.
 
