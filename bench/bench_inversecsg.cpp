@@ -7,7 +7,7 @@
 //
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
 //        [--models 011,039,...] [--samples S] [--time-limit T] [--no-refine-thin]
-//        [--no-unsupported-regions] [--keep OUTDIR]
+//        [--no-unsupported-regions] [--finish] [--keep OUTDIR]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -19,6 +19,8 @@
 //                 a model whose process runs past 3 T + 60 s is killed
 //   --no-unsupported-regions  the hybrid searches only where points are
 //                 badly explained (HybridOptions::unsupportedRegions off)
+//   --finish      the hybrid ends with the finish (FinishOptions::enabled, as
+//                 `csgvox --finish`)
 //   --keep        folder where each model's scan (NNN/scan.ply, after the
 //                 noise) and tree (NNN/tree.json) are written, to look at a
 //                 weak part with `csgvox eval` or run it again with `csgvox`,
@@ -73,6 +75,7 @@ struct Options {
   int resolution = 64;
   bool refineThin = true;
   bool unsupportedRegions = true;
+  bool finish = false;
   int iouSamples = 200000;
   double timeLimit = 0.0;
   Method method = Method::Hybrid;
@@ -197,6 +200,7 @@ Result runModel(const Options& opt, const std::string& model) {
     ro.resolution = opt.resolution;
     ro.refineThin = opt.refineThin;
     ro.hybrid.unsupportedRegions = opt.unsupportedRegions;
+    ro.finish.enabled = opt.finish;
     ro.seed = 1;
     ro.timeLimit = opt.timeLimit;
     ro.method = opt.method;
@@ -373,7 +377,7 @@ int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin] "
-               "[--no-unsupported-regions] [--keep OUTDIR]\n",
+               "[--no-unsupported-regions] [--finish] [--keep OUTDIR]\n",
                argv0);
   return 2;
 }
@@ -395,6 +399,8 @@ int main(int argc, char** argv) {
       opt.refineThin = false;
     } else if (arg == "--no-unsupported-regions") {
       opt.unsupportedRegions = false;
+    } else if (arg == "--finish") {
+      opt.finish = true;
     } else if (arg == "--models" && hasValue) {
       opt.models = splitList(argv[++i]);
     } else if (arg == "--keep" && hasValue) {
@@ -435,10 +441,10 @@ int main(int argc, char** argv) {
   if (opt.timeLimit > 0.0) std::snprintf(limitText, sizeof limitText, "%g s", opt.timeLimit);
   std::printf(
       "InverseCSG benchmark %s: %zu models, %zu points per mesh, noise %.4f D, res %d, "
-      "method %s, time limit %s%s\n",
+      "method %s, time limit %s%s%s\n",
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
       std::string(methodName(opt.method)).c_str(), limitText,
-      opt.refineThin ? ", finer grid where thin" : "");
+      opt.refineThin ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
