@@ -35,7 +35,8 @@ bool flattened(const Surface& s, double diag) {
     case SurfaceType::Sphere:
       return s.as<SphereSurface>()->radius > diag;
     case SurfaceType::Cone:
-      return s.as<ConeSurface>()->halfAngle > 0.5 * std::numbers::pi - 2.0 * std::numbers::pi / 180.0;
+      return s.as<ConeSurface>()->halfAngle >
+             0.5 * std::numbers::pi - 2.0 * std::numbers::pi / 180.0;
     case SurfaceType::Plane:
     case SurfaceType::Torus:
       return false;
