@@ -296,29 +296,6 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
   return true;
 }
 
-// A plausible feature of a part of diagonal D: radii up to D, cones neither
-// nearly flat nor nearly cylindrical.
-bool plausible(const Surface& s, double diag) {
-  constexpr double kMinAngle = 2.0 * std::numbers::pi / 180.0;
-  switch (s.type()) {
-    case SurfaceType::Plane:
-      return true;
-    case SurfaceType::Cylinder:
-      return s.as<CylinderSurface>()->radius <= diag;
-    case SurfaceType::Cone: {
-      const double a = s.as<ConeSurface>()->halfAngle;
-      return a >= kMinAngle && a <= 0.5 * std::numbers::pi - kMinAngle;
-    }
-    case SurfaceType::Sphere:
-      return s.as<SphereSurface>()->radius <= diag;
-    case SurfaceType::Torus: {
-      const auto& t = *s.as<TorusSurface>();
-      return t.majorRadius <= diag && t.minorRadius <= t.majorRadius;
-    }
-  }
-  return false;
-}
-
 // Robust cost of a surface on points, in units of the noise: per point the
 // fit's scaled squared distance (capped at (eps / sigma_p)^2) plus its scaled
 // squared normal deviation (capped at kNormalChi2); both caps for points
@@ -382,9 +359,9 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   fit.maxIterations = 25;
   std::vector<Surface> candidates;
   Surface refined = shape;
-  if (fitSurface(cloud, shape.inliers, refined, scales, fit) >= 0.0 && plausible(refined, diag)) {
+  if (fitSurface(cloud, shape.inliers, refined, scales, fit) >= 0.0 && plausibleSurface(refined, diag)) {
     candidates.push_back(refined);
-  } else if (plausible(shape, diag)) {
+  } else if (plausibleSurface(shape, diag)) {
     candidates.push_back(shape);
   }
   // A plane whose inliers' normals all agree with it is a plane: no curved
@@ -403,8 +380,8 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   }
   for (SurfaceType t : o.enabled) {
     Surface alt;
-    if (!initialSurface(cloud, shape.inliers, t, alt) || !plausible(alt, diag)) continue;
-    if (fitSurface(cloud, shape.inliers, alt, scales, fit) < 0.0 || !plausible(alt, diag)) continue;
+    if (!initialSurface(cloud, shape.inliers, t, alt) || !plausibleSurface(alt, diag)) continue;
+    if (fitSurface(cloud, shape.inliers, alt, scales, fit) < 0.0 || !plausibleSurface(alt, diag)) continue;
     candidates.push_back(std::move(alt));
   }
   if (candidates.empty()) return false;

@@ -476,6 +476,27 @@ int parameterCount(SurfaceType type) {
   return kCounts[static_cast<std::size_t>(type)];
 }
 
+bool plausibleSurface(const Surface& s, double diag) {
+  constexpr double kMinAngle = 2.0 * std::numbers::pi / 180.0;
+  switch (s.type()) {
+    case SurfaceType::Plane:
+      return true;
+    case SurfaceType::Cylinder:
+      return s.as<CylinderSurface>()->radius <= diag;
+    case SurfaceType::Cone: {
+      const double a = s.as<ConeSurface>()->halfAngle;
+      return a >= kMinAngle && a <= 0.5 * std::numbers::pi - kMinAngle;
+    }
+    case SurfaceType::Sphere:
+      return s.as<SphereSurface>()->radius <= diag;
+    case SurfaceType::Torus: {
+      const auto& t = *s.as<TorusSurface>();
+      return t.majorRadius <= diag && t.minorRadius <= t.majorRadius;
+    }
+  }
+  return false;
+}
+
 Vec3 surfaceNormal(const Surface& surface, const Vec3& p) {
   const Vec3 n = convexNormal(surface, p);
   return surface.convex ? n : Vec3(-n);

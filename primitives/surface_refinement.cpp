@@ -24,19 +24,18 @@ namespace {
 using namespace refinement_detail;
 
 // True when a curved surface has flattened into a plane on a part of
-// diagonal D: a cylinder or sphere of radius beyond D, a cone opening to
-// within two degrees of flat. (A part's straight side that RANSAC took as a
-// wide cylinder together with a strip of the round next to it fits so once
-// the round's points go to the round.)
+// diagonal D: a cylinder or sphere too wide to be plausible, or a cone that
+// is implausible on its flat side. (A part's straight side that RANSAC took
+// as a wide cylinder together with a strip of the round next to it fits so
+// once the round's points go to the round.)
 bool flattened(const Surface& s, double diag) {
+  if (plausibleSurface(s, diag)) return false;
   switch (s.type()) {
     case SurfaceType::Cylinder:
-      return s.as<CylinderSurface>()->radius > diag;
     case SurfaceType::Sphere:
-      return s.as<SphereSurface>()->radius > diag;
+      return true;
     case SurfaceType::Cone:
-      return s.as<ConeSurface>()->halfAngle >
-             0.5 * std::numbers::pi - 2.0 * std::numbers::pi / 180.0;
+      return s.as<ConeSurface>()->halfAngle > 0.25 * std::numbers::pi;
     case SurfaceType::Plane:
     case SurfaceType::Torus:
       return false;

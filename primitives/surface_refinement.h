@@ -98,6 +98,11 @@ bool initialSurface(const PointCloud& cloud, std::span<const std::uint32_t> indi
 /// cone 6, torus 7 (the simpler the type, the fewer).
 int parameterCount(SurfaceType type);
 
+/// True when the surface is a plausible feature of a part of diagonal `diag`:
+/// radii up to the diagonal, a torus' tube no wider than its ring, a cone
+/// neither within 2 degrees of flat nor of a cylinder.
+bool plausibleSurface(const Surface& s, double diag);
+
 /// The unit outward normal of the (unbounded) surface at p, oriented as its
 /// inliers: the plane's normal; for curved surfaces away from the axis,
 /// centre or tube centre when the surface is convex, towards it otherwise.

@@ -468,6 +468,24 @@ TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   EXPECT_GT(p.normal.dot(normal), 1.0 - 1e-9);
   EXPECT_NEAR(p.normal.dot(offsetPoint), p.offset, 1e-9);
   EXPECT_LT(s.rms, 1e-9);
+
+  // The same patch bent onto that cylinder of radius 4, within the part's
+  // diagonal: a real wide round, which stays the cylinder.
+  const auto& c = *wide.as<CylinderSurface>();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Vec3 d = cloud.points[i] - c.axisPoint;
+    const Vec3 radial = (d - d.dot(c.axisDir) * c.axisDir).normalized();
+    cloud.points[i] = c.axisPoint + d.dot(c.axisDir) * c.axisDir + c.radius * radial;
+    cloud.normals[i] = radial;
+  }
+  DetectionResult round = result;
+  round.surfaces = {wide};
+  round.assignment.assign(cloud.size(), 0);
+  refineSurfaces(cloud, round);
+  ASSERT_EQ(round.surfaces.size(), 1u);
+  ASSERT_EQ(round.surfaces[0].type(), SurfaceType::Cylinder) << describe(round.surfaces[0]);
+  EXPECT_NEAR(round.surfaces[0].as<CylinderSurface>()->radius, 4.0, 1e-6);
+  EXPECT_EQ(round.surfaces[0].inliers.size(), cloud.size());
 }
 
 // ---------------------------------------------------------------------------
