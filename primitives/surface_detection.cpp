@@ -359,7 +359,8 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   fit.maxIterations = 25;
   std::vector<Surface> candidates;
   Surface refined = shape;
-  if (fitSurface(cloud, shape.inliers, refined, scales, fit) >= 0.0 && plausibleSurface(refined, diag)) {
+  if (fitSurface(cloud, shape.inliers, refined, scales, fit) >= 0.0 &&
+      plausibleSurface(refined, diag)) {
     candidates.push_back(refined);
   } else if (plausibleSurface(shape, diag)) {
     candidates.push_back(shape);
@@ -381,7 +382,8 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   for (SurfaceType t : o.enabled) {
     Surface alt;
     if (!initialSurface(cloud, shape.inliers, t, alt) || !plausibleSurface(alt, diag)) continue;
-    if (fitSurface(cloud, shape.inliers, alt, scales, fit) < 0.0 || !plausibleSurface(alt, diag)) continue;
+    if (fitSurface(cloud, shape.inliers, alt, scales, fit) < 0.0 || !plausibleSurface(alt, diag))
+      continue;
     candidates.push_back(std::move(alt));
   }
   if (candidates.empty()) return false;
