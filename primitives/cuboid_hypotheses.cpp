@@ -195,8 +195,12 @@ class GroupEnumerator {
       for (std::size_t k = 0; k < 3; ++k) {
         if (k != g.axis) height = std::max(height, g.range[k].size());
       }
+      std::array<Range, 3> across = g.range;
+      std::array<std::array<bool, 2>, 3> bounded{};
+      bounded[g.axis] = {true, true};  // the patch's plane and the height
+      snapFreeEnds(across, bounded);
       for (bool tool : {false, true}) {
-        std::array<Range, 3> r = g.range;
+        std::array<Range, 3> r = across;
         // Solid: the box lies behind the patch (against its normal); tool: in front.
         const bool above = (g.sign > 0) == tool;
         r[g.axis] = above ? Range{g.plane, g.plane + height} : Range{g.plane - height, g.plane};
@@ -216,12 +220,55 @@ class GroupEnumerator {
     }
     // The chosen planes are exact faces: a solid box ends at a patch on the
     // patch's normal side, a tool box starts there.
+    std::array<std::array<bool, 2>, 3> bounded{};
     for (std::size_t p : chosen_) {
       const GroupPatch& g = patch(p);
       const bool upper = (g.sign > 0) != tool;
       (upper ? r[g.axis].hi : r[g.axis].lo) = g.plane;
+      bounded[g.axis][upper ? 1 : 0] = true;
     }
+    snapFreeEnds(r, bounded);
     test(r, tool);
+  }
+
+  // Moves each end of the box that no chosen patch bounds (the extreme
+  // inliers of its patches, which noise pushes outwards) onto the group's
+  // nearest plane across that axis within the end's uncertainty (three noise
+  // deviations, at least twice the duplicate tolerance) whose patch overlaps
+  // the box: a plane is fitted to thousands of points, so its position is far
+  // more accurate than the extremes of a noisy patch. Without this a noisy
+  // box comes out a fraction of a voxel too large on every free side (the
+  // same as the ends of a bounded cylinder, snapEndsToPlanes).
+  void snapFreeEnds(std::array<Range, 3>& r,
+                    const std::array<std::array<bool, 2>, 3>& bounded) const {
+    double sigma = 0.0;
+    for (std::size_t p : chosen_) sigma = std::max(sigma, planes_[patch(p).patch].sigma);
+    const double tol = std::max(3.0 * sigma, 2.0 * ctx_.lengthTol);
+    const std::array<Range, 3> original = r;
+    for (std::size_t k = 0; k < 3; ++k) {
+      for (const bool upper : {false, true}) {
+        if (bounded[k][upper ? 1 : 0]) continue;
+        const double end = upper ? original[k].hi : original[k].lo;
+        double best = std::numeric_limits<double>::infinity();
+        for (const GroupPatch& g : patches_) {
+          if (g.axis != k || !(std::abs(g.plane - end) <= tol) ||
+              std::abs(g.plane - end) >= std::abs(best - end)) {
+            continue;
+          }
+          bool overlaps = true;
+          for (std::size_t j = 0; j < 3; ++j) {
+            if (j != k && (g.range[j].hi < original[j].lo || g.range[j].lo > original[j].hi)) {
+              overlaps = false;
+            }
+          }
+          if (overlaps) best = g.plane;
+        }
+        if (std::isfinite(best)) (upper ? r[k].hi : r[k].lo) = best;
+      }
+    }
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (!(r[k].size() > 0.5 * original[k].size())) r[k] = original[k];
+    }
   }
 
   // The degenerate check and filter 2 (fit); survivors wait for filter 3.

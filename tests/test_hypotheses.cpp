@@ -240,6 +240,53 @@ TEST(Hypotheses, RedundancyFilterKeepsOneOfTheSameBoxes) {
   EXPECT_EQ(wholeBoxes, 1);
 }
 
+// Noise pushes a patch's extreme inliers past its edges. A box end that no
+// chosen patch bounds comes from those extremes; where a fitted plane across
+// that axis lies within the end's uncertainty, the end is moved onto it.
+TEST(Hypotheses, FreeBoxEndsSnapOntoTheFittedPlanes) {
+  const CsgTree tree = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(2, 1.5, 1)});
+  const GroundTruth gt = makeGroundTruth(tree, 20000, kNoise, 3);
+  const double sigma = kNoise * gt.diagonal;
+  // The four faces across x and z; none across y, so the y ends stay free.
+  std::vector<Surface> faces;
+  for (const Surface& s : gt.surfaces) {
+    if (std::abs(s.as<PlaneSurface>()->normal.normalized().y()) < 0.5) faces.push_back(s);
+  }
+  ASSERT_EQ(faces.size(), 4u);
+  std::array<std::vector<double>, 3> planes;  // positions of the planes across each axis
+  for (const Surface& s : faces) {
+    const PlaneSurface& pl = *s.as<PlaneSurface>();
+    const Vec3 n = pl.normal.normalized();
+    const int k = std::abs(n.x()) > std::abs(n.z()) ? 0 : 2;
+    planes[k].push_back(pl.offset / pl.normal.norm() / n[k]);
+  }
+  const HypothesisSet set = generateHypotheses(gt.scan, faces);
+  int snapped = 0, freeY = 0;
+  for (const Candidate* c : ofOrigin(set, CandidateOrigin::Cuboid)) {
+    const Box& b = *c->tree.root()->primitive.as<Box>();
+    for (int k = 0; k < 3; ++k) {
+      // The box's extent along world axis k (its axes are the planes' normals).
+      const double half = (b.axes.transpose() * Vec3::Unit(k)).cwiseAbs().dot(b.halfSize);
+      for (const double end : {b.center[k] - half, b.center[k] + half}) {
+        if (k == 1) {
+          freeY += std::abs(std::abs(end) - 1.5) > 0.1 * sigma;
+          continue;
+        }
+        double nearest = std::numeric_limits<double>::infinity();
+        for (double t : planes[static_cast<std::size_t>(k)]) {
+          nearest = std::min(nearest, std::abs(end - t));
+        }
+        if (nearest > 3.0 * sigma) continue;  // a single patch's height: no plane there
+        EXPECT_LT(nearest, 1e-9) << "axis " << k << " end " << end;
+        ++snapped;
+      }
+    }
+  }
+  EXPECT_GE(snapped, 8);
+  // The noise is there: the free ends across y are off the true faces.
+  EXPECT_GE(freeY, 2);
+}
+
 // Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
 // maximal box of the quarter, with its corner on the axis.
 TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
