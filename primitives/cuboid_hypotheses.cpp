@@ -100,12 +100,16 @@ Vec3 longerRectangleSide(const PlanePatch& patch) {
 // then filter 2 per box and filter 3 over the group's survivors.
 class GroupEnumerator {
  public:
+  // `others`: the patches of other groups parallel to one of this group's
+  // axes (planes a free end may snap onto, never chosen).
   GroupEnumerator(const Context& ctx, CuboidStats& stats, const std::vector<PlanePatch>& planes,
-                  std::vector<GroupPatch> patches, std::size_t& budgetUsed)
+                  std::vector<GroupPatch> patches, std::vector<GroupPatch> others,
+                  std::size_t& budgetUsed)
       : ctx_(ctx),
         stats_(stats),
         planes_(planes),
         patches_(std::move(patches)),
+        others_(std::move(others)),
         budgetUsed_(budgetUsed) {
     for (std::size_t i = 0; i < patches_.size(); ++i) {
       const GroupPatch& g = patches_[i];
@@ -195,15 +199,14 @@ class GroupEnumerator {
       for (std::size_t k = 0; k < 3; ++k) {
         if (k != g.axis) height = std::max(height, g.range[k].size());
       }
-      std::array<Range, 3> across = g.range;
-      std::array<std::array<bool, 2>, 3> bounded{};
-      bounded[g.axis] = {true, true};  // the patch's plane and the height
-      snapFreeEnds(across, bounded);
       for (bool tool : {false, true}) {
-        std::array<Range, 3> r = across;
+        std::array<Range, 3> r = g.range;
         // Solid: the box lies behind the patch (against its normal); tool: in front.
         const bool above = (g.sign > 0) == tool;
         r[g.axis] = above ? Range{g.plane, g.plane + height} : Range{g.plane - height, g.plane};
+        std::array<std::array<bool, 2>, 3> bounded{};
+        bounded[g.axis][above ? 0 : 1] = true;  // the patch's plane
+        snapFreeEnds(r, bounded);
         test(r, tool);
       }
       return;
@@ -232,8 +235,8 @@ class GroupEnumerator {
   }
 
   // Moves each end of the box that no chosen patch bounds (the extreme
-  // inliers of its patches, which noise pushes outwards) onto the group's
-  // nearest plane across that axis within the end's uncertainty (three noise
+  // inliers of its patches, which noise pushes outwards) onto the nearest
+  // fitted plane across that axis within the end's uncertainty (three noise
   // deviations, at least twice the duplicate tolerance) whose patch overlaps
   // the box: a plane is fitted to thousands of points, so its position is far
   // more accurate than the extremes of a noisy patch. Without this a noisy
@@ -250,19 +253,20 @@ class GroupEnumerator {
         if (bounded[k][upper ? 1 : 0]) continue;
         const double end = upper ? original[k].hi : original[k].lo;
         double best = std::numeric_limits<double>::infinity();
-        for (const GroupPatch& g : patches_) {
+        auto tryPlane = [&](const GroupPatch& g) {
           if (g.axis != k || !(std::abs(g.plane - end) <= tol) ||
               std::abs(g.plane - end) >= std::abs(best - end)) {
-            continue;
+            return;
           }
-          bool overlaps = true;
           for (std::size_t j = 0; j < 3; ++j) {
             if (j != k && (g.range[j].hi < original[j].lo || g.range[j].lo > original[j].hi)) {
-              overlaps = false;
+              return;  // the patch does not overlap the box
             }
           }
-          if (overlaps) best = g.plane;
-        }
+          best = g.plane;
+        };
+        for (const GroupPatch& g : patches_) tryPlane(g);
+        for (const GroupPatch& g : others_) tryPlane(g);
         if (std::isfinite(best)) (upper ? r[k].hi : r[k].lo) = best;
       }
     }
@@ -348,6 +352,7 @@ class GroupEnumerator {
   CuboidStats& stats_;
   const std::vector<PlanePatch>& planes_;
   std::vector<GroupPatch> patches_;
+  std::vector<GroupPatch> others_;
   std::size_t& budgetUsed_;
   std::array<std::vector<std::size_t>, 6> dirs_;  // +e0, -e0, +e1, -e1, +e2, -e2
   std::array<std::size_t, 7> below_{};
@@ -509,12 +514,21 @@ std::vector<Candidate> cuboidCandidates(const Context& ctx, CuboidStats& stats,
         group.size() >= 2 ? frameFrom(sets[group[0]].direction, sets[group[1]].direction)
                           : frameFrom(sets[group[0]].direction,
                                       longerRectangleSide(patches[sets[group[0]].patches.front()]));
-    std::vector<GroupPatch> local;
+    std::vector<GroupPatch> local, others;
     for (std::size_t node : group) {
       for (std::size_t pi : sets[node].patches)
         local.push_back(groupPatch(ctx, patches, pi, frame));
     }
-    GroupEnumerator enumerator(ctx, stats, patches, std::move(local), budgetUsed);
+    for (std::size_t node = 0; node < sets.size(); ++node) {
+      if (std::find(group.begin(), group.end(), node) != group.end()) continue;
+      for (int k = 0; k < 3; ++k) {
+        if (std::abs(sets[node].direction.dot(frame.col(k))) < ctx.cosParallel) continue;
+        for (std::size_t pi : sets[node].patches)
+          others.push_back(groupPatch(ctx, patches, pi, frame));
+      }
+    }
+    GroupEnumerator enumerator(ctx, stats, patches, std::move(local), std::move(others),
+                               budgetUsed);
     for (const Hypothesis& h : enumerator.run()) {
       Candidate c;
       c.tree = CsgTree::leaf(boxFromRanges(frame, h.ranges));

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <map>
 #include <numbers>
+#include <span>
 #include <string>
 
 #include "candidate_matching.h"
@@ -240,51 +241,85 @@ TEST(Hypotheses, RedundancyFilterKeepsOneOfTheSameBoxes) {
   EXPECT_EQ(wholeBoxes, 1);
 }
 
+// Checks that every end of every cuboid candidate within 3 sigma of a fitted
+// plane across it lies on that plane; returns the number of such ends and
+// adds the number of ends off every plane by more than a tenth of sigma.
+int checkEndsOnPlanes(const HypothesisSet& set, std::span<const Surface> planes, double sigma,
+                      int& offPlane) {
+  int onPlane = 0;
+  for (const Candidate& c : set.candidates) {
+    if (c.origin != CandidateOrigin::Cuboid) continue;
+    const Box& b = *c.tree.root()->primitive.as<Box>();
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 axis = b.axes.col(k);
+      for (const int side : {-1, 1}) {
+        const double end = b.center.dot(axis) + side * b.halfSize[k];
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Surface& s : planes) {
+          const PlaneSurface& pl = *s.as<PlaneSurface>();
+          const double cosine = pl.normal.normalized().dot(axis);
+          if (std::abs(cosine) < 0.999) continue;
+          nearest = std::min(nearest, std::abs(end - pl.offset / pl.normal.norm() / cosine));
+        }
+        offPlane += nearest > 0.1 * sigma;
+        if (nearest > 3.0 * sigma) continue;  // a single patch's height, or a free end
+        EXPECT_LT(nearest, 1e-9) << "end " << end << " of a box along " << axis.transpose();
+        ++onPlane;
+      }
+    }
+  }
+  return onPlane;
+}
+
 // Noise pushes a patch's extreme inliers past its edges. A box end that no
 // chosen patch bounds comes from those extremes; where a fitted plane across
 // that axis lies within the end's uncertainty, the end is moved onto it.
 TEST(Hypotheses, FreeBoxEndsSnapOntoTheFittedPlanes) {
   const CsgTree tree = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(2, 1.5, 1)});
   const GroundTruth gt = makeGroundTruth(tree, 20000, kNoise, 3);
-  const double sigma = kNoise * gt.diagonal;
   // The four faces across x and z; none across y, so the y ends stay free.
   std::vector<Surface> faces;
   for (const Surface& s : gt.surfaces) {
     if (std::abs(s.as<PlaneSurface>()->normal.normalized().y()) < 0.5) faces.push_back(s);
   }
   ASSERT_EQ(faces.size(), 4u);
-  std::array<std::vector<double>, 3> planes;  // positions of the planes across each axis
-  for (const Surface& s : faces) {
-    const PlaneSurface& pl = *s.as<PlaneSurface>();
-    const Vec3 n = pl.normal.normalized();
-    const int k = std::abs(n.x()) > std::abs(n.z()) ? 0 : 2;
-    planes[k].push_back(pl.offset / pl.normal.norm() / n[k]);
-  }
-  const HypothesisSet set = generateHypotheses(gt.scan, faces);
-  int snapped = 0, freeY = 0;
-  for (const Candidate* c : ofOrigin(set, CandidateOrigin::Cuboid)) {
-    const Box& b = *c->tree.root()->primitive.as<Box>();
-    for (int k = 0; k < 3; ++k) {
-      // The box's extent along world axis k (its axes are the planes' normals).
-      const double half = (b.axes.transpose() * Vec3::Unit(k)).cwiseAbs().dot(b.halfSize);
-      for (const double end : {b.center[k] - half, b.center[k] + half}) {
-        if (k == 1) {
-          freeY += std::abs(std::abs(end) - 1.5) > 0.1 * sigma;
-          continue;
-        }
-        double nearest = std::numeric_limits<double>::infinity();
-        for (double t : planes[static_cast<std::size_t>(k)]) {
-          nearest = std::min(nearest, std::abs(end - t));
-        }
-        if (nearest > 3.0 * sigma) continue;  // a single patch's height: no plane there
-        EXPECT_LT(nearest, 1e-9) << "axis " << k << " end " << end;
-        ++snapped;
-      }
+  int offPlane = 0;
+  EXPECT_GE(
+      checkEndsOnPlanes(generateHypotheses(gt.scan, faces), faces, kNoise * gt.diagonal, offPlane),
+      8);
+  // The noise is there: the free ends (across y) are off the true faces.
+  EXPECT_GE(offPlane, 2);
+}
+
+// The same across groups: a block turned 45 degrees about y on an upright
+// one. The upright block's group takes the y planes, so the turned block's
+// boxes have no y patch to choose; their y ends snap onto its own y faces.
+TEST(Hypotheses, FreeBoxEndsSnapOntoPlanesOfOtherGroups) {
+  const Mat3 turned = Eigen::AngleAxisd(0.25 * std::numbers::pi, Vec3::UnitY()).toRotationMatrix();
+  const CsgTree tree = CsgTree::unite({
+      CsgTree::leaf(Box{Vec3(0, 0, 0), Mat3::Identity(), Vec3(3, 1, 2)}),
+      CsgTree::leaf(Box{Vec3(0, 1.5, 0), turned, Vec3(1, 0.5, 1)}),
+  });
+  const GroundTruth gt = makeGroundTruth(tree, 30000, kNoise, 5);
+  const HypothesisSet set = generateHypotheses(gt.scan, gt.surfaces);
+  int offPlane = 0;
+  checkEndsOnPlanes(set, gt.surfaces, kNoise * gt.diagonal, offPlane);
+  // The turned block's own box, y ends included, is among the candidates.
+  int turnedBoxes = 0;
+  for (const Candidate& c : set.candidates) {
+    const Node& n = *c.tree.root();
+    if (c.origin != CandidateOrigin::Cuboid || n.primitive.type() != PrimitiveType::Box) continue;
+    const Box& b = *n.primitive.as<Box>();
+    Vec3 half = b.halfSize;
+    std::sort(half.data(), half.data() + 3);
+    const double alongY = (b.axes.transpose() * Vec3::UnitY()).cwiseAbs().dot(b.halfSize);
+    if ((b.center - Vec3(0, 1.5, 0)).norm() > 0.01 || (half - Vec3(0.5, 1, 1)).norm() > 0.01 ||
+        std::abs(alongY - 0.5) > 1e-9) {
+      continue;
     }
+    ++turnedBoxes;
   }
-  EXPECT_GE(snapped, 8);
-  // The noise is there: the free ends across y are off the true faces.
-  EXPECT_GE(freeY, 2);
+  EXPECT_GE(turnedBoxes, 1);
 }
 
 // Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
