@@ -286,16 +286,21 @@ std::optional<std::pair<double, std::size_t>> capPlane(
   return best;
 }
 
-// Moves the ends of a bounded cylinder onto the fitted planes that cap or
-// cross it there: perpendicular to the axis, within the end's uncertainty
-// (three noise deviations, at least twice the duplicate tolerance) and
-// touching the cylinder's rim. A plane is fitted to thousands of points, so
-// its position is far more accurate than the extreme inliers of a noisy
-// patch; without this, a noisy disk comes out a fraction of a voxel too tall
-// and the optimisation pays a box to trim it.
+// Moves the ends of a bounded cylinder or cone frustum onto the fitted planes
+// that cap or cross it there: perpendicular to the axis, within the end's
+// uncertainty (three noise deviations, at least twice the duplicate
+// tolerance) and touching the rim there. A plane is fitted to thousands of
+// points, so its position is far more accurate than the extreme inliers of a
+// noisy patch; without this, a noisy disk comes out a fraction of a voxel too
+// tall and the optimisation pays a box to trim it.
 void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInfo>& planes) {
   const auto* cyl = q.primitive.as<Cylinder>();
-  if (cyl == nullptr) return;
+  const auto* cone = q.primitive.as<Cone>();
+  if (cyl == nullptr && cone == nullptr) return;
+  // Radius at axial position t (t from q.axisPoint: the cone's apex).
+  const double slope =
+      cone != nullptr ? (cone->radiusTop - cone->radiusBottom) / cone->height : 0.0;
+  const auto radiusAt = [&](double t) { return cyl != nullptr ? cyl->radius : t * slope; };
   const double tol = std::max(3.0 * q.sigma, 2.0 * ctx.lengthTol);
   Range extent = q.extent;
   for (const bool upper : {false, true}) {
@@ -306,10 +311,11 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
       if (std::abs(cosine) < ctx.cosParallel) continue;
       const double t = (pl.offset - pl.normal.dot(q.axisPoint)) / cosine;
       if (!(std::abs(t - end) <= tol) || std::abs(t - end) >= std::abs(best - end)) continue;
+      if (cone != nullptr && !(t >= 0.0)) continue;  // past the apex
       int rim = 0;
       for (const Vec3& p : pl.sample) {
         const Vec3 d = p - q.axisPoint;
-        rim += std::abs((d - d.dot(q.axis) * q.axis).norm() - cyl->radius) <= ctx.voxel;
+        rim += std::abs((d - d.dot(q.axis) * q.axis).norm() - radiusAt(t)) <= ctx.voxel;
       }
       if (rim >= 3) best = t;
     }
@@ -323,8 +329,12 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
     return;
   }
   q.extent = extent;
-  q.primitive = Cylinder{q.axisPoint + 0.5 * (extent.lo + extent.hi) * q.axis, q.axis, cyl->radius,
-                         extent.size()};
+  const Vec3 center = q.axisPoint + 0.5 * (extent.lo + extent.hi) * q.axis;
+  if (cyl != nullptr) {
+    q.primitive = Cylinder{center, q.axis, cyl->radius, extent.size()};
+  } else {
+    q.primitive = Cone{center, q.axis, radiusAt(extent.lo), radiusAt(extent.hi), extent.size()};
+  }
 }
 
 // True when the plane n·x = offset is (within tolerance) one of the fitted planes.

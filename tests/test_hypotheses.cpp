@@ -322,6 +322,31 @@ TEST(Hypotheses, FreeBoxEndsSnapOntoPlanesOfOtherGroups) {
   EXPECT_GE(turnedBoxes, 1);
 }
 
+// A noisy cone frustum standing on a plate, with a flat top: its bounded
+// cone ends on the plate's top plane and on its cap's plane, not at its
+// noisy extreme inliers, with the radii the cone has there.
+TEST(Hypotheses, ConeEndsSnapOntoTheirCapPlanes) {
+  const CsgTree tree = CsgTree::unite({
+      CsgTree::leaf(Box{Vec3(0, 0, 0.5), Mat3::Identity(), Vec3(3, 3, 0.5)}),  // top at z = 1
+      CsgTree::leaf(Cone{Vec3(0, 0, 2), Vec3::UnitZ(), 1.5, 0.75, 2.0}),       // z = 1 to 3
+  });
+  const GroundTruth gt = makeGroundTruth(tree, 30000, kNoise, 9);
+  const HypothesisSet set = generateHypotheses(gt.scan, gt.surfaces);
+  const Cone* cone = nullptr;
+  for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
+    if (const Cone* k = c->tree.root()->primitive.as<Cone>()) cone = k;
+  }
+  ASSERT_NE(cone, nullptr);
+  const double up = cone->axis.z() > 0.0 ? 1.0 : -1.0;
+  const double zLo = cone->center.z() - up * 0.5 * cone->height;
+  const double zHi = cone->center.z() + up * 0.5 * cone->height;
+  EXPECT_NEAR(std::min(zLo, zHi), 1.0, 1e-9);
+  EXPECT_NEAR(std::max(zLo, zHi), 3.0, 1e-9);
+  // The exact surfaces give the exact cone: radius 1.5 at z = 1, 0.75 at z = 3.
+  EXPECT_NEAR(up > 0.0 ? cone->radiusBottom : cone->radiusTop, 1.5, 1e-9);
+  EXPECT_NEAR(up > 0.0 ? cone->radiusTop : cone->radiusBottom, 0.75, 1e-9);
+}
+
 // Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
 // maximal box of the quarter, with its corner on the axis.
 TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
