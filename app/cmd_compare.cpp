@@ -168,7 +168,9 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
       rec.method = Method::Imported;
       rec.detection = found.detection;
       rec.grid = found.grid;
-      rec.labels = methods.empty() ? labelVoxels(found.grid, scan.cloud, base.labels) : labels;
+      LabelOptions lo = base.labels;
+      lo.noise = found.detection.noise;
+      rec.labels = methods.empty() ? labelVoxels(found.grid, scan.cloud, lo) : labels;
       rec.voxels = solidVoxels(rec.tree, rec.grid);
       OutputSet output(folder / "import-gp", jobFiles(), inputs);
       const nlohmann::ordered_json report =

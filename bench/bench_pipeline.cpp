@@ -131,7 +131,9 @@ int runOptimisation(const CsgTree& part, std::size_t points, int repeats) {
       std::printf("%4d detection failed\n", res);
       return 1;
     }
-    const VoxelLabels labels = labelVoxels(found.grid, scan, LabelOptions{});
+    LabelOptions lo;
+    lo.noise = found.detection.noise;
+    const VoxelLabels labels = labelVoxels(found.grid, scan, lo);
     std::vector<CsgTree> candidates;
     for (const Candidate& c : found.hypotheses.candidates) candidates.push_back(c.tree);
     const std::vector<DescriptionSet> d = describeAll(candidates, found.grid, labels);

@@ -233,7 +233,9 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   }
 
   clock.start("labels");
-  out.labels = labelVoxels(out.grid, scan, options.labels);
+  LabelOptions lo = options.labels;
+  lo.noise = out.detection.noise;
+  out.labels = labelVoxels(out.grid, scan, lo);
   clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
                " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
 

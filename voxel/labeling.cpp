@@ -149,19 +149,45 @@ class DipoleTree {
   std::vector<Node> nodes_;
 };
 
-// Area of the surface each point stands for: a disc reaching its k-th
-// neighbour holds about k points.
-std::vector<double> pointAreas(const PointCloud& scan, int k) {
+// Area of the surface each point stands for: a disc reaching the k-th
+// neighbour holds about k points. Noise of deviation σ across the surface
+// spreads the points into a shell, and a ball of radius R then holds about
+// ρπ(R² − 2σ²) of them (ρ the points per area): it must reach farther for
+// its k points, inflating the area, and with it the winding number, whose
+// 0.5 level then lies outside the surface (on a rod 4 voxels thick, a ring
+// of voxels too many). Where that inflation would reach 5 % (2σ² ≥ 0.05 R²),
+// the disc is also measured in the point's tangent plane, to the k-th of
+// its 4k nearest points on the same side of the surface, and the smaller of
+// the two is taken (the ball stays smaller where a thin wall's other side
+// or an edge's other face is near). A clean scan keeps the ball.
+std::vector<double> pointAreas(const PointCloud& scan, int k, double noise) {
   const NearestNeighbors index(scan.points);
   std::vector<double> areas(scan.size());
-  const std::size_t kk = std::size_t(std::max(2, k)) + 1;  // the point itself comes first
+  const std::size_t want = std::size_t(std::max(2, k));
+  const std::size_t kk = std::min(4 * want + 1, scan.size());  // the point itself comes first
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scan.size(), 512),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       std::vector<std::uint32_t> near;
-                      std::vector<double> d2;
+                      std::vector<double> d2, t2;
                       for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        index.kNearest(scan.points[i], std::min(want + 1, scan.size()), near, &d2);
+                        const std::size_t m = std::min(want, near.size() - 1);
+                        const double ball = m > 0 ? std::numbers::pi * d2[m] / double(m) : 0.0;
+                        areas[i] = ball;
+                        if (m == 0 || 2.0 * noise * noise < 0.05 * d2[m]) continue;
                         index.kNearest(scan.points[i], kk, near, &d2);
-                        areas[i] = std::numbers::pi * d2.back() / double(d2.size() - 1);
+                        const Vec3& n = scan.normals[i];
+                        t2.clear();
+                        for (std::size_t j = 1; j < near.size(); ++j) {
+                          if (scan.normals[near[j]].dot(n) <= 0.0) continue;
+                          const Vec3 e = scan.points[near[j]] - scan.points[i];
+                          const double across = e.dot(n);
+                          t2.push_back(std::max(e.squaredNorm() - across * across, 0.0));
+                        }
+                        if (t2.size() < want) continue;
+                        std::nth_element(t2.begin(), t2.begin() + std::ptrdiff_t(want - 1),
+                                         t2.end());
+                        areas[i] = std::min(ball, std::numbers::pi * t2[want - 1] / double(want));
                       }
                     });
   return areas;
@@ -171,7 +197,7 @@ std::vector<double> pointAreas(const PointCloud& scan, int k) {
 class WindingNumber {
  public:
   WindingNumber(const PointCloud& scan, const LabelOptions& o)
-      : tree_(scan, pointAreas(scan, o.areaNeighbors)),
+      : tree_(scan, pointAreas(scan, o.areaNeighbors, o.noise)),
         ratio_(o.farFieldRatio),
         threshold_(o.windingThreshold) {}
 

@@ -56,6 +56,8 @@ struct LabelOptions {
   double farFieldRatio =
       2.0;  ///< WindingNumber: a cluster is approximated when farther than this many of its radii
   int areaNeighbors = 10;  ///< WindingNumber: neighbours used to estimate each point's area
+  double noise = 0.0;  ///< WindingNumber: the scan's noise deviation (scan units); where it would
+                       ///< inflate a point's area by 5 %, the area is measured in its tangent plane
   BoundaryRule boundary = BoundaryRule::Centre;  ///< labelling of voxels that hold points (Inside:
                                                  ///< Wu's rule as written)
   bool keepThinWalls =
