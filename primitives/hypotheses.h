@@ -98,7 +98,8 @@ struct HypothesisOptions {
   bool toolCuboids = true;                   ///< also build inward-facing (tool) cuboids
   double quarterTolerance = 15.0;  ///< degrees; a cylinder patch of 90 +- this is a quarter
   bool extendToCaps = true;        ///< also cylinders extended to a cap past a chamfer
-  bool snapToPlanes = true;        ///< cylinder and cone ends onto the fitted planes that cap or cross them
+  bool snapToPlanes =
+      true;  ///< cylinder and cone ends onto the fitted planes that cap or cross them
   bool extendOpenEnds =
       true;                ///< also cylinders run out to the scan's extent past ends on no plane
   std::uint32_t seed = 1;  ///< seed of CGAL's bounding-box search

