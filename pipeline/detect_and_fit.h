@@ -32,9 +32,11 @@ struct DetectAndFitOptions {
   DetectOptions detect;    ///< surface detection (its seed is replaced by `seed`)
   HypothesisOptions
       hypotheses;  ///< hypotheses (voxelSize and seed are set from the grid and `seed`)
-  /// A scan whose estimated position noise is larger is refused as not the
+  /// A scan whose estimated position noise is larger, on the whole scan or
+  /// on 2000 of its points (wider neighbourhoods), is refused as not the
   /// scan of a solid's surfaces (scattered points), fraction of D. The
-  /// bundled noisy scans have 0.005; uniform random points in a cube 0.06.
+  /// bundled noisy scans have 0.005; uniform random points in a cube about
+  /// 0.037.
   double maxNoise = 0.02;
   /// Finer voxels for thin parts: when the surfaces show a feature thinner
   /// than `thinVoxels` voxels at `resolution` (a wall or a slot between

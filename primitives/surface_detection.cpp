@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,6 +17,8 @@
 #include <optional>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "core/nearest_neighbors.h"
 #include "core/principal_axes.h"
@@ -425,33 +428,58 @@ namespace {
 
 // The estimators below on a prebuilt neighbour structure of the cloud's points.
 double estimateNoise(const PointCloud& cloud, const NearestNeighbors& nn, int neighbors) {
-  std::size_t k = std::size_t(std::max(neighbors, 4));
+  const std::size_t k = std::size_t(std::max(neighbors, 8));
   if (cloud.size() < k + 1) return 0.0;
+  const bool normals = cloud.hasNormals();
   const std::vector<std::uint32_t> sample = strideSubset(cloud.size(), 4000);
-  // Residual RMS of m points around a fitted plane (3 parameters): sigma^2 *
-  // chi^2(m-3) / m; divide by the chi^2 median (Wilson-Hilferty).
-  double sigma = 0.0;
-  while (true) {
-    std::vector<double> rms(sample.size()), radius(sample.size());
-    tbb::parallel_for(std::size_t(0), sample.size(), [&](std::size_t s) {
-      std::vector<std::uint32_t> idx;
-      std::vector<double> d2;
-      nn.kNearest(cloud.points[sample[s]], k + 1, idx, &d2);
-      rms[s] = std::sqrt(std::max(0.0, principalAxes(cloud.points, idx).variances[2]));
-      radius[s] = std::sqrt(d2.back());
-    });
-    const double m = double(k + 1), nu = m - 3.0;
-    const double chiMedian = nu * std::pow(1.0 - 2.0 / (9.0 * nu), 3.0);
-    sigma = median(std::move(rms)) * std::sqrt(m / chiMedian);
-    // Neighbourhoods not much wider than the noise are flattened by it (the
-    // nearest neighbours of a noisy point lie on its side of the surface) and
-    // underestimate it; wide ones see curvature and edges and overestimate
-    // it. Measured on the bundled parts at 10k and 100k points, a median
-    // radius of about 4.5 sigma is where the estimate meets the truth.
-    if (median(std::move(radius)) >= 4.5 * sigma || k >= 256 || 2 * k + 1 > cloud.size()) break;
-    k *= 2;
-  }
-  return sigma;
+  // Each sampled point's k nearest neighbours *in its tangent plane*: a plane
+  // fitted to its k nearest in space would be flattened by the noise (the
+  // ball of a noisy point holds the points on its side of the surface, and
+  // where the ball is not much wider than the noise the fit's least spread
+  // runs along the surface), and wider balls reach edges and thin walls.
+  // The normal comes from the 6k nearest that face the same way (normals
+  // within about 45 degrees, so the faces across an edge or a thin wall stay
+  // out); the heights of the k+1 along it are fitted by a quadric over the
+  // tangent plane (6 coefficients: tilt and curvature absorbed, so a clean
+  // curved face reads 0), and the residual is sigma^2 chi^2(k-5)/(k+1).
+  const std::size_t wide = std::min(cloud.size(), 6 * k + 1);
+  std::vector<double> rms(sample.size(), -1.0);
+  tbb::parallel_for(std::size_t(0), sample.size(), [&](std::size_t s) {
+    std::vector<std::uint32_t> idx, same;
+    std::vector<std::pair<double, Vec3>> disc;  // (tangent distance^2, offset)
+    const std::uint32_t i = sample[s];
+    const Vec3& p = cloud.points[i];
+    nn.kNearest(p, wide, idx);
+    for (std::uint32_t j : idx) {
+      if (!normals || cloud.normals[j].dot(cloud.normals[i]) > 0.7) same.push_back(j);
+    }
+    if (same.size() < k + 1) return;
+    const PrincipalAxes axes = principalAxes(cloud.points, same);
+    const Vec3 n = axes.axes.col(2), u = axes.axes.col(0), v = axes.axes.col(1);
+    disc.reserve(same.size());
+    for (std::uint32_t j : same) {
+      const Vec3 d = cloud.points[j] - p;
+      disc.emplace_back(d.squaredNorm() - d.dot(n) * d.dot(n), d);
+    }
+    std::nth_element(disc.begin(), disc.begin() + std::ptrdiff_t(k), disc.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    Eigen::MatrixXd a(k + 1, 6);
+    Eigen::VectorXd h(k + 1);
+    for (std::size_t t = 0; t <= k; ++t) {
+      const Vec3& d = disc[t].second;
+      const double x = d.dot(u), y = d.dot(v);
+      a.row(Eigen::Index(t)) << 1.0, x, y, x * x, x * y, y * y;
+      h(Eigen::Index(t)) = d.dot(n);
+    }
+    const Eigen::VectorXd c = a.colPivHouseholderQr().solve(h);
+    rms[s] = std::sqrt((a * c - h).squaredNorm() / double(k + 1));
+  });
+  std::erase_if(rms, [](double r) { return r < 0.0; });
+  if (rms.empty()) return 0.0;
+  // The median of chi^2(nu) (Wilson-Hilferty), nu = k + 1 - 6.
+  const double m = double(k + 1), nu = m - 6.0;
+  const double chiMedian = nu * std::pow(1.0 - 2.0 / (9.0 * nu), 3.0);
+  return median(std::move(rms)) * std::sqrt(m / chiMedian);
 }
 
 double estimateNormalNoise(const PointCloud& cloud, const NearestNeighbors& nn) {
@@ -486,7 +514,7 @@ double estimateSpacing(const PointCloud& cloud, const NearestNeighbors& nn) {
 void setScales(const PointCloud& cloud, const DetectOptions& options, DetectionResult& result) {
   const double diag = result.diagonal;
   const NearestNeighbors nn(cloud.points);
-  result.noise = estimateNoise(cloud, nn, 8);  // estimateNoise's default neighbourhood
+  result.noise = estimateNoise(cloud, nn, 12);  // estimateNoise's default neighbourhood
   result.normalNoise = estimateNormalNoise(cloud, nn);
   const double spacing = estimateSpacing(cloud, nn);
   result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,

@@ -79,14 +79,15 @@ struct DetectionResult {
 /// Name of a status for messages: "ok", "no surfaces", "degenerate input", "cancelled".
 std::string_view detectionStatusName(DetectionResult::Status status);
 
-/// Robust estimate of the scan's noise sigma: the median RMS residual of
-/// plane fits to the k nearest neighbours of (a deterministic subset of) the
-/// points, corrected for the fit's degrees of freedom. k starts at
-/// `neighbors` and doubles (up to 256) until the neighbourhoods are about 4.5
-/// sigma wide, so dense noisy scans are not underestimated. Curvature and
-/// edges bias it little because the median ignores them. Scan units; 0 for
-/// fewer than neighbors+1 points.
-double estimateNoise(const PointCloud& cloud, int neighbors = 8);
+/// Robust estimate of the scan's noise sigma: over a deterministic subset of
+/// the points, the median residual of a quadric height fit, along the local
+/// normal, to each point's `neighbors` nearest in its tangent plane (among
+/// its 6 x neighbors nearest that face the same way when the cloud has
+/// normals), corrected for the fit's degrees of freedom. Scale-free, not
+/// flattened by the noise from sparse to dense scans, 0 on clean faces flat
+/// or curved; edges and thin walls bias it little because the median
+/// ignores them. Scan units; 0 for fewer than neighbors+1 points.
+double estimateNoise(const PointCloud& cloud, int neighbors = 12);
 
 /// Robust estimate of the noise of the scan's normals: the median angle
 /// between a point's normal and its nearest neighbour's, divided by sqrt(2),
