@@ -398,7 +398,8 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
                                  ? rFunctionOperations()
                                  : minMaxOperations();
   const std::vector<std::uint32_t> bad =
-      badlyExplained(scan, tree, ops, options.fitness.distanceTolerance * diagonal,
+      badlyExplained(scan, tree, ops,
+                     std::max(options.fitness.distanceTolerance * diagonal, 3.0 * options.noise),
                      options.badAngle * std::numbers::pi / 180.0);
   out.badPoints = bad.size();
 

@@ -162,6 +162,7 @@ void hybridMethod(Reconstruction& out, const PointCloud& scan, const Reconstruct
   clock.start("refine");
   HybridOptions ho = options.hybrid;
   ho.evolve.seed = options.seed;
+  ho.noise = out.detection.noise;
   double left = 0.0;
   if (deadline != Clock::time_point::max()) {
     left = std::max(std::chrono::duration<double>(deadline - Clock::now()).count(), 1e-3);
