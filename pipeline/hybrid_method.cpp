@@ -397,10 +397,9 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
                              : options.fitness.operations == SetOperationKind::RFunction
                                  ? rFunctionOperations()
                                  : minMaxOperations();
-  const std::vector<std::uint32_t> bad =
-      badlyExplained(scan, tree, ops,
-                     std::max(options.fitness.distanceTolerance * diagonal, 3.0 * options.noise),
-                     options.badAngle * std::numbers::pi / 180.0);
+  const std::vector<std::uint32_t> bad = badlyExplained(
+      scan, tree, ops, std::max(options.fitness.distanceTolerance * diagonal, 3.0 * options.noise),
+      options.badAngle * std::numbers::pi / 180.0);
   out.badPoints = bad.size();
 
   // Regions of bad points, each with the members of the tree around it.

@@ -55,7 +55,7 @@ inline EvolveOptions refineSearchDefaults() {
 struct HybridOptions {
   FitnessOptions fitness = {.voxelWeight = 1.0};  ///< Eq. 7 (min/max field) + the voxel term
   EvolveOptions evolve = refineSearchDefaults();  ///< each region's search
-  double badAngle = 30.0;          ///< degrees: a normal further off is badly explained
+  double badAngle = 30.0;  ///< degrees: a normal further off is badly explained
   double noise = 0.0;  ///< the scan's noise sigma (scan units): a point within 3 sigma of the tree
                        ///< is not badly explained by its distance (0: εd alone decides)
   double regionCell = 2.0;         ///< voxels: bad points in neighbouring cells of this size join
