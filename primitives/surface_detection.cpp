@@ -514,7 +514,7 @@ double estimateSpacing(const PointCloud& cloud, const NearestNeighbors& nn) {
 void setScales(const PointCloud& cloud, const DetectOptions& options, DetectionResult& result) {
   const double diag = result.diagonal;
   const NearestNeighbors nn(cloud.points);
-  result.noise = estimateNoise(cloud, nn, 12);  // estimateNoise's default neighbourhood
+  result.noise = estimateNoise(cloud, nn, kNoiseNeighbors);
   result.normalNoise = estimateNormalNoise(cloud, nn);
   const double spacing = estimateSpacing(cloud, nn);
   result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,

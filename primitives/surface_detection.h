@@ -79,6 +79,9 @@ struct DetectionResult {
 /// Name of a status for messages: "ok", "no surfaces", "degenerate input", "cancelled".
 std::string_view detectionStatusName(DetectionResult::Status status);
 
+/// The neighbourhood of estimateNoise, by default and in detection.
+inline constexpr int kNoiseNeighbors = 12;
+
 /// Robust estimate of the scan's noise sigma: over a deterministic subset of
 /// the points, the median residual of a quadric height fit, along the local
 /// normal, to each point's `neighbors` nearest in its tangent plane (among
@@ -87,7 +90,7 @@ std::string_view detectionStatusName(DetectionResult::Status status);
 /// flattened by the noise from sparse to dense scans, 0 on clean faces flat
 /// or curved; edges and thin walls bias it little because the median
 /// ignores them. Scan units; 0 for fewer than neighbors+1 points.
-double estimateNoise(const PointCloud& cloud, int neighbors = 12);
+double estimateNoise(const PointCloud& cloud, int neighbors = kNoiseNeighbors);
 
 /// Robust estimate of the noise of the scan's normals: the median angle
 /// between a point's normal and its nearest neighbour's, divided by sqrt(2),
