@@ -62,6 +62,51 @@ std::vector<std::vector<std::size_t>> clusterByWeight(
   return clusters;
 }
 
+// Greedy clustering of positions, heaviest first, measured from each
+// cluster's weighted mean: the heaviest unclustered item seeds a cluster,
+// which takes the unclustered compatible items within `tolerance` of its
+// mean, recomputed until the members stop changing. A noisy surface that
+// detection split into several fits has fits on both sides of its true
+// position; measured from the heaviest fit alone, the far side is out of
+// reach and stays a second surface.
+std::vector<std::vector<std::size_t>> clusterAroundMean(
+    const std::vector<double>& weights, const std::vector<Vec3>& positions, double tolerance,
+    const std::function<bool(std::size_t, std::size_t)>& compatible) {
+  constexpr int kMaxRounds = 16;
+  std::vector<std::size_t> order(weights.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  std::vector<char> used(weights.size(), 0);
+  std::vector<std::vector<std::size_t>> clusters;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t seed = order[k];
+    if (used[seed]) continue;
+    used[seed] = 1;
+    std::vector<std::size_t> members{seed};
+    Vec3 centre = positions[seed];
+    for (int round = 0; round < kMaxRounds; ++round) {
+      std::vector<std::size_t> next{seed};
+      Vec3 sum = weights[seed] * positions[seed];
+      double w = weights[seed];
+      for (std::size_t m = k + 1; m < order.size(); ++m) {
+        const std::size_t j = order[m];
+        if (used[j] || !compatible(seed, j) || (positions[j] - centre).norm() > tolerance) continue;
+        next.push_back(j);
+        sum += weights[j] * positions[j];
+        w += weights[j];
+      }
+      const bool stable = next == members;
+      members = std::move(next);
+      centre = sum / w;
+      if (stable) break;
+    }
+    for (std::size_t j : members) used[j] = 1;
+    clusters.push_back(std::move(members));
+  }
+  return clusters;
+}
+
 // The field `Member` of a surface of type Shape; null for other types.
 template <class Shape, double Shape::*Member>
 double* fieldOf(Surface& s) {
@@ -270,10 +315,13 @@ class Regularizer {
       const Vec3 d = dir(k);
       return Vec3(p - p.dot(d) * d);
     };
-    const auto clusters = clusterByWeight(weights, [&](std::size_t a, std::size_t b) {
-      const Vec3 da = dir(a), db = dir(b);
-      return (da == db || da == -db) && (foot(a) - foot(b)).norm() <= axisTol_;
-    });
+    std::vector<Vec3> feet;
+    for (std::size_t k = 0; k < axial.size(); ++k) feet.push_back(foot(k));
+    const auto clusters =
+        clusterAroundMean(weights, feet, axisTol_, [&](std::size_t a, std::size_t b) {
+          const Vec3 da = dir(a), db = dir(b);
+          return da == db || da == -db;
+        });
     std::vector<std::pair<Vec3, Vec3>> lines;  // (point, direction) of the shared axes
     for (const auto& members : clusters) {
       Vec3 sum = Vec3::Zero();

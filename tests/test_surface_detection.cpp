@@ -846,6 +846,38 @@ TEST(Regularization, MergesTheTwoHalvesOfASplitNoisyCone) {
   EXPECT_NEAR(r.surfaces[1].as<ConeSurface>()->apex.z(), 10.0, 1e-12);
 }
 
+TEST(Regularization, JoinsTheFitsOfASplitNoisyRodAroundTheirMeanAxis) {
+  // RANSAC splits a thin noisy rod into several cylinders whose axes lie
+  // around the true one, each fitted to the side of the noise band it took.
+  // Here four fits, 0.3 from the true axis (epsilon 0.5): the two opposite
+  // ones are 0.6 apart, out of reach of the heaviest fit alone, but all four
+  // are within 0.5 of their mean. They become one rod on the true axis; a
+  // fifth cylinder 0.8 away keeps its own axis.
+  const Vec3 axis = Vec3(1, 2, 0).normalized();
+  const Vec3 u = axis.cross(Vec3::UnitZ()).normalized(), v = axis.cross(u);
+  DetectionResult r;
+  const std::size_t weights[] = {400, 300, 200, 100};
+  for (int k = 0; k < 4; ++k) {
+    const double a = k * std::numbers::pi / 2.0;
+    const Vec3 foot = 0.3 * (std::cos(a) * u + std::sin(a) * v);
+    r.surfaces.push_back(cylinderSurface(foot + 3.0 * axis, axis, 2.0, weights[k]));
+  }
+  r.surfaces.push_back(cylinderSurface(0.8 * u + 0.8 * v, axis, 1.0, 150));
+  finish(r);
+  r.noise = 0.2;
+  const RegularizationReport report = regularizeSurfaces(r);
+  EXPECT_EQ(report.duplicatesMerged, 3);
+  ASSERT_EQ(r.surfaces.size(), 2u);
+  const auto* rod = r.surfaces[0].as<CylinderSurface>();
+  ASSERT_NE(rod, nullptr);
+  EXPECT_EQ(r.surfaces[0].inliers.size(), 1000u);
+  // The inlier-weighted mean of the four feet: 0.3 * (0.2 u + 0.2 v).
+  EXPECT_LT(lineDistance(0.06 * (u + v), rod->axisPoint, rod->axisDir), 1e-9);
+  const auto* other = r.surfaces[1].as<CylinderSurface>();
+  ASSERT_NE(other, nullptr);
+  EXPECT_LT(lineDistance(0.8 * u + 0.8 * v, other->axisPoint, other->axisDir), 1e-9);
+}
+
 TEST(Regularization, RotatedInputGivesTheRotatedResult) {
   // The same configuration in two frames: the same relations are found.
   std::vector<RegularizationReport> reports;
