@@ -41,6 +41,40 @@ Range robustRange(std::vector<double> values, double sigma) {
   return r;
 }
 
+Range denseRange(std::vector<double> values, Range range) {
+  constexpr std::size_t kPerBin = 50, kMinValues = 800, kMaxBins = 256;
+  if (values.size() < kMinValues || !(range.size() > 0.0)) return range;
+  const std::size_t bins = std::min(kMaxBins, values.size() / kPerBin);
+  const double width = range.size() / double(bins);
+  std::vector<std::size_t> count(bins, 0);
+  for (double v : values) {
+    if (v < range.lo || v > range.hi) continue;
+    ++count[std::min(bins - 1, static_cast<std::size_t>((v - range.lo) / width))];
+  }
+  std::vector<std::size_t> filled;
+  for (std::size_t c : count) {
+    if (c > 0) filled.push_back(c);
+  }
+  const auto mid = filled.begin() + static_cast<std::ptrdiff_t>(filled.size() / 2);
+  std::nth_element(filled.begin(), mid, filled.end());
+  const double sparse = 0.25 * double(*mid);
+  // The patch starts at the first run of kRun dense bins: a single bin of a
+  // tail can reach the threshold by chance (its count varies by its square
+  // root), kRun in a row hardly.
+  constexpr std::size_t kRun = 3;
+  const auto denseRun = [&](std::size_t from, bool up) {
+    for (std::size_t k = 0; k < kRun; ++k) {
+      if (up ? from + k >= bins : k > from) return false;
+      if (double(count[up ? from + k : from - k]) < sparse) return false;
+    }
+    return true;
+  };
+  std::size_t first = 0, last = bins - 1;
+  while (first < last && !denseRun(first, true)) ++first;
+  while (last > first && !denseRun(last, false)) --last;
+  return Range{range.lo + double(first) * width, range.lo + double(last + 1) * width};
+}
+
 Mat3 searchedBoxFrame(std::span<const Vec3> points, std::uint32_t seed) {
   return minimalBoxFrame(points, MinimalBoxOptions{seed, kBoxSearchPoints});
 }

@@ -42,6 +42,17 @@ struct Range {
 /// sigma = 0, the exact min and max. `values` must not be empty.
 Range robustRange(std::vector<double> values, double sigma);
 
+/// `range` (robustRange of `values`) without its sparse ends: the positions
+/// along a cylinder's axis of its inliers are uniformly dense over the
+/// patch, and an end where fewer than a quarter of the typical density lie
+/// is not the patch but the noise tail of a neighbouring surface that the
+/// cylinder's band reached (the head of a bolt around a thin noisy shank).
+/// The density is counted in bins of about 50 values; the typical one is
+/// the median of the non-empty bins, and each end moves in to the first run
+/// of three bins at least that dense. Returns `range` for fewer than 800
+/// values.
+Range denseRange(std::vector<double> values, Range range);
+
 /// The box with unit axes `frame` (columns, right-handed) spanning `ranges`
 /// (coordinates along the frame's axes).
 Box boxFromRanges(const Mat3& frame, const std::array<Range, 3>& ranges);

@@ -60,16 +60,26 @@ Vec3 projectOnto(const SurfaceShape& shape, const Vec3& p) {
   return p;
 }
 
+// Positions of `points` along the line through `origin` with unit direction `axis`.
+std::vector<double> axialPositions(std::span<const Vec3> points, const Vec3& origin,
+                                   const Vec3& axis) {
+  std::vector<double> t;
+  t.reserve(points.size());
+  for (const Vec3& p : points) t.push_back((p - origin).dot(axis));
+  return t;
+}
+
 // A fitted quadric with its bounded primitive.
 struct Quadric {
   std::size_t surface = 0;
   Primitive primitive;
   std::vector<Vec3> points;  // inliers projected onto the surface
   double sigma = 0.0;
-  bool axial = false;                        // cylinder, cone, torus: has an axis
-  Vec3 axis = Vec3::UnitZ();                 // unit
-  Vec3 axisPoint = Vec3::Zero();             // origin of the axial coordinate t
-  Range extent;                              // of the inliers along the axis (t)
+  bool axial = false;             // cylinder, cone, torus: has an axis
+  Vec3 axis = Vec3::UnitZ();      // unit
+  Vec3 axisPoint = Vec3::Zero();  // origin of the axial coordinate t
+  Range extent;                   // of the inliers along the axis (t)
+  Range dense;  // a cylinder's extent without sparse ends (denseRange), else `extent`
   std::array<bool, 2> capped{false, false};  // lower, upper end on a fitted plane
 };
 
@@ -84,17 +94,17 @@ std::optional<Quadric> boundedQuadric(const Context& ctx, std::size_t index) {
   q.sigma = s.rms;  // what is left: noise along the surface
   const double minSize = 1e-6 * ctx.diagonal;
   auto axialRange = [&](const Vec3& origin, const Vec3& axis) {
-    std::vector<double> t;
-    t.reserve(q.points.size());
-    for (const Vec3& p : q.points) t.push_back((p - origin).dot(axis));
+    std::vector<double> t = axialPositions(q.points, origin, axis);
     q.axial = true;
     q.axis = axis;
     q.axisPoint = origin;
     q.extent = robustRange(std::move(t), q.sigma);
+    q.dense = q.extent;
   };
   if (const auto* c = s.as<CylinderSurface>()) {
     if (!(c->radius > 0.0) || !(c->axisDir.norm() > 0.0)) return std::nullopt;
     axialRange(c->axisPoint, c->axisDir.normalized());
+    q.dense = denseRange(axialPositions(q.points, c->axisPoint, q.axis), q.extent);
     if (!(q.extent.size() > minSize)) return std::nullopt;
     q.primitive = Cylinder{q.axisPoint + 0.5 * (q.extent.lo + q.extent.hi) * q.axis, q.axis,
                            c->radius, q.extent.size()};
@@ -303,8 +313,11 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
   const auto radiusAt = [&](double t) { return cyl != nullptr ? cyl->radius : t * slope; };
   const double tol = std::max(3.0 * q.sigma, 2.0 * ctx.lengthTol);
   Range extent = q.extent;
-  for (const bool upper : {false, true}) {
-    const double end = upper ? q.extent.hi : q.extent.lo;
+  // A sparse end (the noise tail of a neighbouring surface) is dropped only
+  // where the dense patch ends on a plane; without one the end stays where
+  // the inliers end (a cylinder meeting another one obliquely thins out
+  // towards its end and is no shorter for it).
+  const auto nearestPlane = [&](double end) {
     double best = std::numeric_limits<double>::infinity();
     for (const PlaneInfo& pl : planes) {
       const double cosine = pl.normal.dot(q.axis);
@@ -319,6 +332,14 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
       }
       if (rim >= 3) best = t;
     }
+    return best;
+  };
+  for (const bool upper : {false, true}) {
+    const double denseEnd = upper ? q.dense.hi : q.dense.lo;
+    const double end = upper ? q.extent.hi : q.extent.lo;
+    double best =
+        denseEnd != end ? nearestPlane(denseEnd) : std::numeric_limits<double>::infinity();
+    if (!std::isfinite(best)) best = nearestPlane(end);
     if (std::isfinite(best)) {
       (upper ? extent.hi : extent.lo) = best;
       q.capped[upper ? 1 : 0] = true;

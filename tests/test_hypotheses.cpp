@@ -348,6 +348,42 @@ TEST(Hypotheses, ConeEndsSnapOntoTheirCapPlanes) {
   EXPECT_NEAR(up > 0.0 ? cone->radiusTop : cone->radiusBottom, 0.75, 1e-9);
 }
 
+TEST(Hypotheses, CylinderEndsLeaveTheSparseNoiseTailsOfTheirNeighbours) {
+  // A shank (radius 0.3, z = -5 to 4.5) under a head (radius 0.45, z = 4.5
+  // to 5). On a noisy scan of a thin shank the shank's band reaches the
+  // head's side: one in eight of the head's side points (about 15 % of the
+  // shank's density along the axis) joins the shank's inliers. The shank
+  // ends at the head, on the plane z = 4.5, not at the head's top.
+  const CsgTree tree = CsgTree::unite({
+      CsgTree::leaf(Cylinder{Vec3(0, 0, -0.25), Vec3::UnitZ(), 0.3, 9.5}),
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 4.75), Vec3::UnitZ(), 0.45, 0.5}),
+  });
+  GroundTruth gt = makeGroundTruth(tree, 30000, 0.0, 9);
+  const int shank = surfaceOf(gt, 0, 0), head = surfaceOf(gt, 1, 0);
+  ASSERT_GE(shank, 0);
+  ASSERT_GE(head, 0);
+  const auto shankTop = [&](const std::vector<Surface>& surfaces) {
+    const HypothesisSet set = generateHypotheses(gt.scan, surfaces);
+    double top = -1e300;
+    for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
+      const Cylinder* k = c->tree.root()->primitive.as<Cylinder>();
+      if (k && std::abs(k->radius - 0.3) < 1e-9) {
+        top = std::max(top, k->center.z() + 0.5 * k->height * std::abs(k->axis.z()));
+      }
+    }
+    return top;
+  };
+  EXPECT_NEAR(shankTop(gt.surfaces), 4.5, 1e-9);
+  std::vector<Surface> surfaces = gt.surfaces;
+  auto& from = surfaces[std::size_t(head)].inliers;
+  auto& to = surfaces[std::size_t(shank)].inliers;
+  ASSERT_GT(from.size(), 1000u);
+  std::vector<std::uint32_t> kept;
+  for (std::size_t k = 0; k < from.size(); ++k) (k % 8 == 0 ? to : kept).push_back(from[k]);
+  from = kept;
+  EXPECT_NEAR(shankTop(surfaces), 4.5, 1e-9);
+}
+
 // Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
 // maximal box of the quarter, with its corner on the axis.
 TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
