@@ -41,7 +41,7 @@ Range robustRange(std::vector<double> values, double sigma) {
   return r;
 }
 
-Range denseRange(std::vector<double> values, Range range) {
+Range denseRange(std::span<const double> values, Range range) {
   constexpr std::size_t kPerBin = 50, kMinValues = 800, kMaxBins = 256;
   if (values.size() < kMinValues || !(range.size() > 0.0)) return range;
   const std::size_t bins = std::min(kMaxBins, values.size() / kPerBin);

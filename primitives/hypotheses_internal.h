@@ -51,7 +51,7 @@ Range robustRange(std::vector<double> values, double sigma);
 /// the median of the non-empty bins, and each end moves in to the first run
 /// of three bins at least that dense. Returns `range` for fewer than 800
 /// values.
-Range denseRange(std::vector<double> values, Range range);
+Range denseRange(std::span<const double> values, Range range);
 
 /// The box with unit axes `frame` (columns, right-handed) spanning `ranges`
 /// (coordinates along the frame's axes).

@@ -93,18 +93,18 @@ std::optional<Quadric> boundedQuadric(const Context& ctx, std::size_t index) {
   for (Vec3& p : q.points) p = projectOnto(s.shape, p);
   q.sigma = s.rms;  // what is left: noise along the surface
   const double minSize = 1e-6 * ctx.diagonal;
-  auto axialRange = [&](const Vec3& origin, const Vec3& axis) {
-    std::vector<double> t = axialPositions(q.points, origin, axis);
+  // The inliers' extent along the axis; `dense` also drops sparse ends (cylinders).
+  auto axialRange = [&](const Vec3& origin, const Vec3& axis, bool dense = false) {
+    const std::vector<double> t = axialPositions(q.points, origin, axis);
     q.axial = true;
     q.axis = axis;
     q.axisPoint = origin;
-    q.extent = robustRange(std::move(t), q.sigma);
-    q.dense = q.extent;
+    q.extent = robustRange(t, q.sigma);
+    q.dense = dense ? denseRange(t, q.extent) : q.extent;
   };
   if (const auto* c = s.as<CylinderSurface>()) {
     if (!(c->radius > 0.0) || !(c->axisDir.norm() > 0.0)) return std::nullopt;
-    axialRange(c->axisPoint, c->axisDir.normalized());
-    q.dense = denseRange(axialPositions(q.points, c->axisPoint, q.axis), q.extent);
+    axialRange(c->axisPoint, c->axisDir.normalized(), true);
     if (!(q.extent.size() > minSize)) return std::nullopt;
     q.primitive = Cylinder{q.axisPoint + 0.5 * (q.extent.lo + q.extent.hi) * q.axis, q.axis,
                            c->radius, q.extent.size()};
