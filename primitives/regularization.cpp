@@ -33,16 +33,22 @@ double angleBetween(const Vec3& a, const Vec3& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
+// Item indices by decreasing weight (ties in index order).
+std::vector<std::size_t> heaviestFirst(const std::vector<double>& weights) {
+  std::vector<std::size_t> order(weights.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  return order;
+}
+
 // Greedy clustering of scalar or vector values, heaviest first: each cluster
 // takes the unclustered items within `tolerance` of its seed. Returns the
 // clusters as lists of item indices.
 std::vector<std::vector<std::size_t>> clusterByWeight(
     const std::vector<double>& weights,
     const std::function<bool(std::size_t, std::size_t)>& close) {
-  std::vector<std::size_t> order(weights.size());
-  std::iota(order.begin(), order.end(), std::size_t(0));
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  const std::vector<std::size_t> order = heaviestFirst(weights);
   std::vector<char> used(weights.size(), 0);
   std::vector<std::vector<std::size_t>> clusters;
   for (std::size_t k = 0; k < order.size(); ++k) {
@@ -73,10 +79,7 @@ std::vector<std::vector<std::size_t>> clusterAroundMean(
     const std::vector<double>& weights, const std::vector<Vec3>& positions, double tolerance,
     const std::function<bool(std::size_t, std::size_t)>& compatible) {
   constexpr int kMaxRounds = 16;
-  std::vector<std::size_t> order(weights.size());
-  std::iota(order.begin(), order.end(), std::size_t(0));
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  const std::vector<std::size_t> order = heaviestFirst(weights);
   std::vector<char> used(weights.size(), 0);
   std::vector<std::vector<std::size_t>> clusters;
   for (std::size_t k = 0; k < order.size(); ++k) {
