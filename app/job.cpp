@@ -68,6 +68,10 @@ void addJobOptions(CLI::App& app, JobSettings& s) {
                  "hybrid: a region's search stops after this many generations without "
                  "improvement (0: never)")
       ->check(inRange(0, 1e7));
+  app.add_option("--refine-searches", hy.searches,
+                 "hybrid: independent searches of each region, each with its own seed; the one "
+                 "with the best fitness on the region's points is kept")
+      ->check(inRange(1, 64));
   app.add_option("--refine-population", hy.evolve.population,
                  "hybrid: creatures per generation of each region's search")
       ->check(inRange(3, 100000));
@@ -255,6 +259,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
       parameters["refine_population"] = h.evolve.population;
       parameters["refine_generations"] = h.evolve.maxGenerations;
       parameters["refine_stall"] = h.evolve.stallGenerations;
+      parameters["refine_searches"] = h.searches;
       parameters["bad_angle_deg"] = h.badAngle;
       parameters["refine_operations"] = settings.refineOperations;
       parameters["refine_voxel_weight"] = h.fitness.voxelWeight;
@@ -313,6 +318,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                            {"members", r.members},
                            {"library", r.library},
                            {"generations", r.generations},
+                           {"search", r.search},
                            {"fitness_before", r.localBefore},
                            {"fitness_after", r.localAfter},
                            {"primitives_before", r.primitivesBefore},

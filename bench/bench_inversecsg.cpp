@@ -7,7 +7,8 @@
 //
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
 //        [--models 011,039,...] [--samples S] [--time-limit T] [--no-refine-thin]
-//        [--no-unsupported-regions] [--finish] [--keep OUTDIR]
+//        [--no-unsupported-regions] [--finish] [--refine-searches K]
+//        [--refine-stall S] [--keep OUTDIR]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -19,6 +20,9 @@
 //                 a model whose process runs past 3 T + 60 s is killed
 //   --no-unsupported-regions  the hybrid searches only where points are
 //                 badly explained (HybridOptions::unsupportedRegions off)
+//   --refine-searches K, --refine-stall S  the hybrid's searches of each
+//                 region and their stall rule (as `csgvox --refine-searches`,
+//                 `--refine-stall`)
 //   --finish      the hybrid ends with the finish (FinishOptions::enabled, as
 //                 `csgvox --finish`)
 //   --keep        folder where each model's scan (NNN/scan.ply, after the
@@ -75,6 +79,8 @@ struct Options {
   int resolution = 64;
   bool refineThin = true;
   bool unsupportedRegions = true;
+  std::size_t refineSearches = 0;  // 0: the default
+  std::size_t refineStall = 0;     // 0: the default
   bool finish = false;
   int iouSamples = 200000;
   double timeLimit = 0.0;
@@ -200,6 +206,8 @@ Result runModel(const Options& opt, const std::string& model) {
     ro.resolution = opt.resolution;
     ro.refineThin = opt.refineThin;
     ro.hybrid.unsupportedRegions = opt.unsupportedRegions;
+    if (opt.refineSearches > 0) ro.hybrid.searches = opt.refineSearches;
+    if (opt.refineStall > 0) ro.hybrid.evolve.stallGenerations = opt.refineStall;
     ro.finish.enabled = opt.finish;
     ro.seed = 1;
     ro.timeLimit = opt.timeLimit;
@@ -377,7 +385,8 @@ int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin] "
-               "[--no-unsupported-regions] [--finish] [--keep OUTDIR]\n",
+               "[--no-unsupported-regions] [--finish] [--refine-searches K] "
+               "[--refine-stall S] [--keep OUTDIR]\n",
                argv0);
   return 2;
 }
@@ -401,6 +410,10 @@ int main(int argc, char** argv) {
       opt.unsupportedRegions = false;
     } else if (arg == "--finish") {
       opt.finish = true;
+    } else if (arg == "--refine-searches" && hasValue) {
+      opt.refineSearches = std::size_t(std::max(1, std::atoi(argv[++i])));
+    } else if (arg == "--refine-stall" && hasValue) {
+      opt.refineStall = std::size_t(std::max(1, std::atoi(argv[++i])));
     } else if (arg == "--models" && hasValue) {
       opt.models = splitList(argv[++i]);
     } else if (arg == "--keep" && hasValue) {
@@ -445,6 +458,9 @@ int main(int argc, char** argv) {
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
       std::string(methodName(opt.method)).c_str(), limitText,
       opt.refineThin ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
+  if (opt.refineSearches > 0 || opt.refineStall > 0)
+    std::printf("hybrid searches per region: %zu, stall: %zu generations (0: the default)\n",
+                opt.refineSearches, opt.refineStall);
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",

@@ -462,13 +462,30 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   }
   regions = joinMeetingRegions(std::move(regions), memberBounds);
 
-  // The regions' searches, in parallel; each is deterministic for its seed.
-  std::vector<RegionSearch> found(regions.size());
+  // The regions' searches, `searches` of each with seeds of their own, all in
+  // parallel; each is deterministic for its seed. A region keeps the search
+  // with the best fitness on its points (the first of equals).
+  const std::size_t searches = std::max<std::size_t>(options.searches, 1);
+  std::vector<RegionSearch> runs(regions.size() * searches);
   const double left = timeLimit > 0.0 ? std::max(timeLimit - secondsSince(start), 1e-3) : 0.0;
-  tbb::parallel_for(std::size_t{0}, regions.size(), [&](std::size_t k) {
-    found[k] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
-                            mixSeed(options.evolve.seed, k), left);
+  tbb::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t j) {
+    const std::size_t k = j / searches, s = j % searches;
+    const std::uint64_t seed = mixSeed(options.evolve.seed, k);
+    runs[j] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
+                           s == 0 ? seed : mixSeed(seed, s), left);
   });
+  std::vector<RegionSearch> found(regions.size());
+  for (std::size_t k = 0; k < regions.size(); ++k) {
+    std::size_t kept = k * searches;
+    double seconds = 0.0;
+    for (std::size_t j = k * searches; j < (k + 1) * searches; ++j) {
+      seconds += runs[j].report.seconds;
+      if (runs[j].report.localAfter > runs[kept].report.localAfter) kept = j;
+    }
+    found[k] = std::move(runs[kept]);
+    found[k].report.search = kept - k * searches;
+    found[k].report.seconds = seconds;
+  }
 
   // The tree with the refined subtrees of the accepted regions and of
   // region `trial` in place of their members (regions are disjoint in

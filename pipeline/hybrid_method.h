@@ -75,6 +75,10 @@ struct HybridOptions {
                                 ///< to form a region (a random gap between points of a sparse
                                 ///< scan is wider than εd; one this wide is rarer than 1 in 1000)
   std::size_t maxRepairs = 16;  ///< seeds of such a region that set its voxels right, at most
+  std::size_t searches = 1;     ///< independent searches of each region (seeds of their own), all
+                                ///< run in parallel; the one with the best fitness on the region's
+                                ///< points is judged (one search finds a repair that another
+                                ///< misses; the first search is the one a single search runs)
 };
 
 /// What became of a region's refined subtree.
@@ -99,7 +103,7 @@ struct HybridRegion {
   std::size_t points = 0;        ///< points its search was judged on
   std::size_t members = 0;       ///< union members of the tree in its subtree
   std::size_t library = 0;       ///< primitives its search combined
-  std::size_t generations = 0;   ///< generations of its search
+  std::size_t generations = 0;   ///< generations of its kept search
   double localBefore = 0.0;      ///< the subtree's fitness on the region's points
   double localAfter = 0.0;       ///< the search's best tree's
   RegionVerdict verdict = RegionVerdict::NotImproved;  ///< why it went in or not
@@ -108,7 +112,8 @@ struct HybridRegion {
   double unsupported = -1.0;  ///< the tree with it: boundary no point is near (< 0: not weighed)
   std::size_t primitivesBefore = 0;  ///< primitives of the subtree
   std::size_t primitivesAfter = 0;   ///< primitives of the refined subtree
-  double seconds = 0.0;              ///< wall time of its search
+  std::size_t search = 0;            ///< which of its searches was kept (0-based)
+  double seconds = 0.0;              ///< wall time of its searches, summed
 };
 
 /// Result of refineTree().

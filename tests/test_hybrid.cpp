@@ -242,6 +242,37 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
   EXPECT_EQ(one.after.total, two.after.total);
 }
 
+// Each region is searched several times with seeds of its own, and keeps
+// the search with the best fitness on its points: its first search is the
+// one a single search would run, so more searches never end below one.
+TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
+  const SlotCase c = slotCase();
+  HybridOptions weak;  // searches short enough to end in different places
+  weak.evolve.population = 6;
+  weak.evolve.maxGenerations = 3;
+  weak.maxCandidates = 1;
+  HybridOptions one = weak, three = weak;
+  one.searches = 1;
+  three.searches = 3;
+  const HybridResult r1 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, one);
+  const HybridResult r3 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+  ASSERT_EQ(r1.regions.size(), 1u);
+  ASSERT_EQ(r3.regions.size(), 1u);
+  EXPECT_EQ(r1.regions[0].search, 0u);
+  EXPECT_LT(r3.regions[0].search, 3u);
+  EXPECT_GE(r3.regions[0].localAfter, r1.regions[0].localAfter);
+  EXPECT_GE(r3.after.total, r1.after.total);
+  // The same result with one thread or two.
+  HybridResult a, b;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    a = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+  }
+  EXPECT_TRUE(a.tree.structurallyEqual(r3.tree));
+  EXPECT_EQ(a.after.total, r3.after.total);
+  EXPECT_EQ(a.regions[0].search, r3.regions[0].search);
+}
+
 TEST(Hybrid, PointsWithinTheNoiseOfTheTreeAreNotBadlyExplained) {
   // The true tree on a scan with sigma = 0.5 % D: εd (1 % D) is two sigmas,
   // so about 1 point in 20 lies beyond it by noise alone. Told the noise,
