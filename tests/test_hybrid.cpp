@@ -245,6 +245,8 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
 // Each region is searched several times with seeds of its own, and keeps
 // the search with the best fitness on its points: its first search is the
 // one a single search would run, so more searches never end below one.
+// (Here the searches end level: the test holds that bound, the report and
+// the determinism, not which of unequal searches is kept.)
 TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
   const SlotCase c = slotCase();
   HybridOptions weak;  // searches short enough to end in different places
