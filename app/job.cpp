@@ -319,6 +319,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                            {"library", r.library},
                            {"generations", r.generations},
                            {"search", r.search},
+                           {"search_fitness", r.searchFitness},
                            {"fitness_before", r.localBefore},
                            {"fitness_after", r.localAfter},
                            {"primitives_before", r.primitivesBefore},

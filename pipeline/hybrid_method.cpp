@@ -478,12 +478,15 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   for (std::size_t k = 0; k < regions.size(); ++k) {
     std::size_t kept = k * searches;
     double seconds = 0.0;
+    std::vector<double> fitness;
     for (std::size_t j = k * searches; j < (k + 1) * searches; ++j) {
       seconds += runs[j].report.seconds;
+      fitness.push_back(runs[j].report.localAfter);
       if (runs[j].report.localAfter > runs[kept].report.localAfter) kept = j;
     }
     found[k] = std::move(runs[kept]);
     found[k].report.search = kept - k * searches;
+    found[k].report.searchFitness = std::move(fitness);
     found[k].report.seconds = seconds;
   }
 

@@ -110,10 +110,12 @@ struct HybridRegion {
   /// The refined subtree went into the tree.
   bool replaced() const { return verdict == RegionVerdict::Replaced; }
   double unsupported = -1.0;  ///< the tree with it: boundary no point is near (< 0: not weighed)
-  std::size_t primitivesBefore = 0;  ///< primitives of the subtree
-  std::size_t primitivesAfter = 0;   ///< primitives of the refined subtree
-  std::size_t search = 0;            ///< which of its searches was kept (0-based)
-  double seconds = 0.0;              ///< wall time of its searches, summed
+  std::size_t primitivesBefore = 0;   ///< primitives of the subtree
+  std::size_t primitivesAfter = 0;    ///< primitives of the refined subtree
+  std::size_t search = 0;             ///< which of its searches was kept (0-based)
+  std::vector<double> searchFitness;  ///< each search's best fitness on the region's points, in
+                                      ///< search order (localAfter is the largest, first of equals)
+  double seconds = 0.0;               ///< wall time of its searches, summed
 };
 
 /// Result of refineTree().

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 
 #include "cli_helpers.h"
@@ -247,32 +249,80 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
 // one a single search would run, so more searches never end below one.
 // (Here the searches end level: the test holds that bound, the report and
 // the determinism, not which of unequal searches is kept.)
+// The slot case with a second slot beside the first, both candidates: the
+// seeds of a search hold one slot each, and a short search may or may not
+// combine them, depending on its seed.
+SlotCase twoSlotCase() {
+  SlotCase c = slotCase();
+  const Box plate{Vec3::Zero(), Mat3::Identity(), Vec3(20, 12, 3)};
+  const Box slot{Vec3(4, 0, 1.5), Mat3::Identity(), Vec3(0.25, 8, 2)};
+  const Box slot2{Vec3(6, 0, 1.5), Mat3::Identity(), Vec3(0.25, 8, 2)};
+  c.truth = CsgTree::subtract(
+      {CsgTree::leaf(plate, "plate"), CsgTree::leaf(slot, "slot"), CsgTree::leaf(slot2, "slot2")});
+  Candidate candidate;
+  candidate.tree = CsgTree::leaf(slot2, "slot2");
+  c.candidates.push_back(candidate);
+  SampleOptions so;
+  so.points = 30000;
+  c.scan = sampleSurface(c.truth, so).cloud;
+  return c;
+}
+
 TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
-  const SlotCase c = slotCase();
+  const SlotCase c = twoSlotCase();
   HybridOptions weak;  // searches short enough to end in different places
   weak.evolve.population = 6;
-  weak.evolve.maxGenerations = 3;
-  weak.maxCandidates = 1;
-  HybridOptions one = weak, three = weak;
-  one.searches = 1;
-  three.searches = 3;
-  const HybridResult r1 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, one);
-  const HybridResult r3 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
-  ASSERT_EQ(r1.regions.size(), 1u);
-  ASSERT_EQ(r3.regions.size(), 1u);
-  EXPECT_EQ(r1.regions[0].search, 0u);
-  EXPECT_LT(r3.regions[0].search, 3u);
-  EXPECT_GE(r3.regions[0].localAfter, r1.regions[0].localAfter);
-  EXPECT_GE(r3.after.total, r1.after.total);
-  // The same result with one thread or two.
-  HybridResult a, b;
+  weak.evolve.maxGenerations = 4;
+  weak.maxCandidates = 2;
+  weak.searches = 3;
+  std::size_t apart = 0, keptLater = 0, bothCutByOne = 0, bothCutByThree = 0;
+  std::uint64_t apartSeed = 0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    HybridOptions three = weak;
+    three.evolve.seed = seed;
+    HybridOptions one = three;
+    one.searches = 1;
+    const HybridResult r1 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, one);
+    const HybridResult r3 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+    ASSERT_EQ(r1.regions.size(), 1u);
+    ASSERT_EQ(r3.regions.size(), 1u);
+    const HybridRegion& h = r3.regions[0];
+    ASSERT_EQ(h.searchFitness.size(), 3u);
+    ASSERT_EQ(r1.regions[0].searchFitness.size(), 1u);
+    EXPECT_EQ(r1.regions[0].search, 0u);
+    // Search 0 is the single search of the same seed.
+    EXPECT_EQ(h.searchFitness[0], r1.regions[0].localAfter) << "seed " << seed;
+    // The kept one is the best, the first of equals.
+    const auto best = std::max_element(h.searchFitness.begin(), h.searchFitness.end());
+    EXPECT_EQ(h.search, std::size_t(best - h.searchFitness.begin())) << "seed " << seed;
+    EXPECT_EQ(h.localAfter, *best) << "seed " << seed;
+    if (*std::min_element(h.searchFitness.begin(), h.searchFitness.end()) < *best) {
+      ++apart;
+      apartSeed = seed;
+    }
+    keptLater += h.search > 0;
+    bothCutByOne += volumetricIou(r1.tree, c.truth, 400) > 0.999;
+    bothCutByThree += volumetricIou(r3.tree, c.truth, 400) > 0.999;
+  }
+  // Where the searches end level, or search 0 is always the best, any
+  // choice would pass: the seeds must show both cases.
+  ASSERT_GT(apart, 0u) << "the searches ended level on every seed";
+  EXPECT_GT(keptLater, 0u) << "search 0 was the best on every seed";
+  EXPECT_GE(bothCutByThree, bothCutByOne);
+  EXPECT_GT(bothCutByThree, 0u);
+  // The same result with one thread or two, on a seed where they end apart.
+  HybridOptions three = weak;
+  three.evolve.seed = apartSeed;
+  const HybridResult r = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+  HybridResult a;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     a = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
   }
-  EXPECT_TRUE(a.tree.structurallyEqual(r3.tree));
-  EXPECT_EQ(a.after.total, r3.after.total);
-  EXPECT_EQ(a.regions[0].search, r3.regions[0].search);
+  EXPECT_TRUE(a.tree.structurallyEqual(r.tree));
+  EXPECT_EQ(a.after.total, r.after.total);
+  EXPECT_EQ(a.regions[0].search, r.regions[0].search);
+  EXPECT_EQ(a.regions[0].searchFitness, r.regions[0].searchFitness);
 }
 
 TEST(Hybrid, PointsWithinTheNoiseOfTheTreeAreNotBadlyExplained) {
@@ -354,6 +404,9 @@ TEST_F(Cli, HybridIsTheDefaultAndReportsItsRefinement) {
   for (const auto& region : r["regions"]) {
     replaced += region["replaced"].get<bool>();
     EXPECT_EQ(region["replaced"].get<bool>(), region["verdict"] == "replaced");
+    // One search by default: its fitness is the region's.
+    ASSERT_EQ(region["search_fitness"].size(), 1u);
+    EXPECT_EQ(region["search_fitness"][0], region["fitness_after"]);
   }
   EXPECT_EQ(r["subtrees_replaced"].get<std::size_t>(), replaced);
 }
