@@ -25,9 +25,11 @@
 //                 `--refine-stall`)
 //   --finish      the hybrid ends with the finish (FinishOptions::enabled, as
 //                 `csgvox --finish`)
-//   --keep        folder where each model's scan (NNN/scan.ply, after the
-//                 noise) and tree (NNN/tree.json) are written, to look at a
-//                 weak part with `csgvox eval` or run it again with `csgvox`,
+//   --keep        folder where each model's scan (after the noise: NNN/scan.ply
+//                 in floats for viewers, NNN/scan.xyz with every digit) and
+//                 tree (NNN/tree.json) are written, to look at a weak part
+//                 with `csgvox eval` or run it again with `csgvox` (from
+//                 scan.xyz, which gives the same tree as the run),
 //                 and the IoU's samples where they disagree: NNN/extra.ply in
 //                 the tree only, NNN/missing.ply in the part only
 //
@@ -199,7 +201,8 @@ Result runModel(const Options& opt, const std::string& model) {
     const std::filesystem::path keep = opt.keep.empty() ? opt.keep : opt.keep / model;
     if (!keep.empty()) {
       std::filesystem::create_directories(keep);
-      writePointCloudPly(keep / "scan.ply", scan);
+      writePointCloudPly(keep / "scan.ply", scan);  // floats, for viewers
+      writePointCloudXyz(keep / "scan.xyz", scan);  // every digit: csgvox gives this run's tree
     }
 
     ReconstructOptions ro;
