@@ -29,7 +29,8 @@
 //                 in floats for viewers, NNN/scan.xyz with every digit) and
 //                 tree (NNN/tree.json) are written, to look at a weak part
 //                 with `csgvox eval` or run it again with `csgvox` (from
-//                 scan.xyz, which gives the same tree as the run),
+//                 scan.xyz, which gives the run's tree but for the last bits
+//                 of the normals, which reading scales to unit length),
 //                 and the IoU's samples where they disagree: NNN/extra.ply in
 //                 the tree only, NNN/missing.ply in the part only
 //
@@ -202,7 +203,7 @@ Result runModel(const Options& opt, const std::string& model) {
     if (!keep.empty()) {
       std::filesystem::create_directories(keep);
       writePointCloudPly(keep / "scan.ply", scan);  // floats, for viewers
-      writePointCloudXyz(keep / "scan.xyz", scan);  // every digit: csgvox gives this run's tree
+      writePointCloudXyz(keep / "scan.xyz", scan);  // every digit, to run it again
     }
 
     ReconstructOptions ro;
