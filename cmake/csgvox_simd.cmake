@@ -11,21 +11,21 @@
 # empty and the portable kernels are used.
 include_guard(GLOBAL)
 
-# -ffp-contract=off: with FMA available GCC would otherwise fuse a * b + c on
-# its own, and floating-point kernels would round differently per level.
-set(CSGVOX_SIMD_AVX2_OPTIONS -mavx2 -mfma -mbmi -mbmi2 -mpopcnt -ffp-contract=off)
-set(CSGVOX_SIMD_AVX512_OPTIONS ${CSGVOX_SIMD_AVX2_OPTIONS} -mavx512f -mavx512bw -mavx512dq
-    -mavx512vl -mavx512cd -mavx512vpopcntdq)
-
 function(csgvox_simd_sources level)
   if(NOT CMAKE_SYSTEM_PROCESSOR MATCHES "x86_64|AMD64|i.86"
      OR NOT CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
     return()
   endif()
+  # The options live in the function, not in variables of the file: the
+  # include guard skips the file in every directory but the first, and a
+  # variable set there would be empty in the others.
+  # -ffp-contract=off: with FMA available GCC would otherwise fuse a * b + c on
+  # its own, and floating-point kernels would round differently per level.
+  set(avx2 -mavx2 -mfma -mbmi -mbmi2 -mpopcnt -ffp-contract=off)
   if(level STREQUAL "AVX2")
-    set(options ${CSGVOX_SIMD_AVX2_OPTIONS})
+    set(options ${avx2})
   elseif(level STREQUAL "AVX512")
-    set(options ${CSGVOX_SIMD_AVX512_OPTIONS})
+    set(options ${avx2} -mavx512f -mavx512bw -mavx512dq -mavx512vl -mavx512cd -mavx512vpopcntdq)
   else()
     message(FATAL_ERROR "csgvox_simd_sources: unknown level '${level}' (AVX2 or AVX512)")
   endif()

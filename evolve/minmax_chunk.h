@@ -58,4 +58,11 @@ void minMaxChunkPortable(const MinMaxChunk& k, std::size_t start, std::size_t m,
 void minMaxChunkAvx2(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
 void minMaxChunkAvx512(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
 
+/// Whether minMaxChunkAvx2 / minMaxChunkAvx512 were compiled with their
+/// level's flags (cmake/csgvox_simd.cmake). False where the build gives none
+/// (not x86-64, or not GCC or Clang): the kernel is then the portable one
+/// under that name. Safe to call on any CPU.
+bool minMaxChunkAvx2Built();
+bool minMaxChunkAvx512Built();
+
 }  // namespace csgvox::fitness_detail

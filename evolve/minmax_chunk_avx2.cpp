@@ -4,3 +4,15 @@
 
 #define CSGVOX_MINMAX_CHUNK minMaxChunkAvx2
 #include "evolve/minmax_chunk.inc"
+
+namespace csgvox::fitness_detail {
+
+bool minMaxChunkAvx2Built() {
+#if defined(__AVX2__)
+  return true;
+#else
+  return false;
+#endif
+}
+
+}  // namespace csgvox::fitness_detail

@@ -4,3 +4,15 @@
 
 #define CSGVOX_MINMAX_CHUNK minMaxChunkAvx512
 #include "evolve/minmax_chunk.inc"
+
+namespace csgvox::fitness_detail {
+
+bool minMaxChunkAvx512Built() {
+#if defined(__AVX512F__)
+  return true;
+#else
+  return false;
+#endif
+}
+
+}  // namespace csgvox::fitness_detail

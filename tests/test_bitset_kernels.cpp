@@ -108,5 +108,21 @@ TEST(BitsetKernels, LevelsAreCappedToTheCpuAndTheBuild) {
   EXPECT_EQ(top.count(w, 2), 9u);
 }
 
+// Each vector file is compiled with its level's flags wherever the build
+// gives them (x86-64 with GCC or Clang; cmake/csgvox_simd.cmake), in every
+// module that has such files.
+TEST(BitsetKernels, TheVectorKernelsAreBuiltWhereTheBuildGivesTheFlags) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  if (detectedSimdLevel() >= SimdLevel::Avx2) {
+    EXPECT_NE(avx2BitsetKernels(), nullptr);
+  }
+  if (detectedSimdLevel() >= SimdLevel::Avx512) {
+    EXPECT_NE(avx512BitsetKernels(), nullptr);
+  }
+#else
+  GTEST_SKIP() << "the build has no vector flags for this processor or compiler";
+#endif
+}
+
 }  // namespace
 }  // namespace csgvox

@@ -132,6 +132,18 @@ TEST(Fitness, EveryInstructionSetGivesTheSameSums) {
   }
 }
 
+// The vector kernels are compiled with their level's flags wherever the
+// build gives them (x86-64 with GCC or Clang): without them each is the
+// portable kernel under another name, and the level changes nothing.
+TEST(Fitness, TheVectorKernelsAreBuiltForTheirLevel) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  EXPECT_TRUE(fitness_detail::minMaxChunkAvx2Built());
+  EXPECT_TRUE(fitness_detail::minMaxChunkAvx512Built());
+#else
+  GTEST_SKIP() << "the build has no vector flags for this processor or compiler";
+#endif
+}
+
 TEST(Fitness, RFunctionsMatchDirectComputation) {
   const test::OrientedPoints in = noisyCube(5);
   const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(0.5, 0.5, 0.5), 0.8}});
