@@ -318,7 +318,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                            {"members", r.members},
                            {"library", r.library},
                            {"generations", r.generations},
-                           {"search", r.search},
+                           {"search", r.search()},
                            {"search_fitness", r.searchFitness},
                            {"fitness_before", r.localBefore},
                            {"fitness_after", r.localAfter},

@@ -476,18 +476,14 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   });
   std::vector<RegionSearch> found(regions.size());
   for (std::size_t k = 0; k < regions.size(); ++k) {
-    std::size_t kept = k * searches;
-    double seconds = 0.0;
-    std::vector<double> fitness;
+    HybridRegion all;  // every search's fitness, and their time
     for (std::size_t j = k * searches; j < (k + 1) * searches; ++j) {
-      seconds += runs[j].report.seconds;
-      fitness.push_back(runs[j].report.localAfter);
-      if (runs[j].report.localAfter > runs[kept].report.localAfter) kept = j;
+      all.searchFitness.push_back(runs[j].report.localAfter);
+      all.seconds += runs[j].report.seconds;
     }
-    found[k] = std::move(runs[kept]);
-    found[k].report.search = kept - k * searches;
-    found[k].report.searchFitness = std::move(fitness);
-    found[k].report.seconds = seconds;
+    found[k] = std::move(runs[k * searches + all.search()]);
+    found[k].report.searchFitness = std::move(all.searchFitness);
+    found[k].report.seconds = all.seconds;
   }
 
   // The tree with the refined subtrees of the accepted regions and of

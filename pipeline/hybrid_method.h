@@ -26,6 +26,7 @@
 /// when a subtree was replaced, redundant nodes of the whole tree are removed. When none was, the
 /// result is the input tree itself.
 
+#include <algorithm>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -109,12 +110,17 @@ struct HybridRegion {
   RegionVerdict verdict = RegionVerdict::NotImproved;  ///< why it went in or not
   /// The refined subtree went into the tree.
   bool replaced() const { return verdict == RegionVerdict::Replaced; }
+  /// Which of its searches was kept (0-based): the best, the first of equals
+  /// (0 before any search).
+  std::size_t search() const {
+    return std::size_t(std::max_element(searchFitness.begin(), searchFitness.end()) -
+                       searchFitness.begin());
+  }
   double unsupported = -1.0;  ///< the tree with it: boundary no point is near (< 0: not weighed)
   std::size_t primitivesBefore = 0;   ///< primitives of the subtree
   std::size_t primitivesAfter = 0;    ///< primitives of the refined subtree
-  std::size_t search = 0;             ///< which of its searches was kept (0-based)
   std::vector<double> searchFitness;  ///< each search's best fitness on the region's points, in
-                                      ///< search order (localAfter is the largest, first of equals)
+                                      ///< search order (localAfter is the largest)
   double seconds = 0.0;               ///< wall time of its searches, summed
 };
 

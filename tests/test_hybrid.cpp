@@ -244,11 +244,6 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
   EXPECT_EQ(one.after.total, two.after.total);
 }
 
-// Each region is searched several times with seeds of its own, and keeps
-// the search with the best fitness on its points: its first search is the
-// one a single search would run, so more searches never end below one.
-// (Here the searches end level: the test holds that bound, the report and
-// the determinism, not which of unequal searches is kept.)
 // The slot case with a second slot beside the first, both candidates: the
 // seeds of a search hold one slot each, and a short search may or may not
 // combine them, depending on its seed.
@@ -268,6 +263,9 @@ SlotCase twoSlotCase() {
   return c;
 }
 
+// Each region is searched several times with seeds of its own, and keeps
+// the search with the best fitness on its points: its first search is the
+// one a single search would run, so more searches never end below one.
 TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
   const SlotCase c = twoSlotCase();
   HybridOptions weak;  // searches short enough to end in different places
@@ -289,18 +287,18 @@ TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
     const HybridRegion& h = r3.regions[0];
     ASSERT_EQ(h.searchFitness.size(), 3u);
     ASSERT_EQ(r1.regions[0].searchFitness.size(), 1u);
-    EXPECT_EQ(r1.regions[0].search, 0u);
+    EXPECT_EQ(r1.regions[0].search(), 0u);
     // Search 0 is the single search of the same seed.
     EXPECT_EQ(h.searchFitness[0], r1.regions[0].localAfter) << "seed " << seed;
     // The kept one is the best, the first of equals.
     const auto best = std::max_element(h.searchFitness.begin(), h.searchFitness.end());
-    EXPECT_EQ(h.search, std::size_t(best - h.searchFitness.begin())) << "seed " << seed;
+    EXPECT_EQ(h.search(), std::size_t(best - h.searchFitness.begin())) << "seed " << seed;
     EXPECT_EQ(h.localAfter, *best) << "seed " << seed;
     if (*std::min_element(h.searchFitness.begin(), h.searchFitness.end()) < *best) {
       ++apart;
       apartSeed = seed;
     }
-    keptLater += h.search > 0;
+    keptLater += h.search() > 0;
     bothCutByOne += volumetricIou(r1.tree, c.truth, 400) > 0.999;
     bothCutByThree += volumetricIou(r3.tree, c.truth, 400) > 0.999;
   }
@@ -321,7 +319,7 @@ TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
   }
   EXPECT_TRUE(a.tree.structurallyEqual(r.tree));
   EXPECT_EQ(a.after.total, r.after.total);
-  EXPECT_EQ(a.regions[0].search, r.regions[0].search);
+  EXPECT_EQ(a.regions[0].search(), r.regions[0].search());
   EXPECT_EQ(a.regions[0].searchFitness, r.regions[0].searchFitness);
 }
 
