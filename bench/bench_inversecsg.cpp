@@ -8,7 +8,7 @@
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
 //        [--models 011,039,...] [--samples S] [--time-limit T] [--no-refine-thin]
 //        [--no-unsupported-regions] [--finish] [--refine-searches K]
-//        [--refine-stall S] [--keep OUTDIR]
+//        [--refine-stall S] [--seed S] [--keep OUTDIR]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -23,6 +23,9 @@
 //   --refine-searches K, --refine-stall S  the hybrid's searches of each
 //                 region and their stall rule (as `csgvox --refine-searches`,
 //                 `--refine-stall`)
+//   --seed        ReconstructOptions::seed (default 1; as `csgvox --seed`): the
+//                 scans stay the same, only the reconstruction's random
+//                 choices change, to tell a change's effect from luck
 //   --finish      the hybrid ends with the finish (FinishOptions::enabled, as
 //                 `csgvox --finish`)
 //   --keep        folder where each model's scan (after the noise: NNN/scan.ply
@@ -85,6 +88,7 @@ struct Options {
   std::size_t refineSearches = 0;  // 0: the default
   std::size_t refineStall = 0;     // 0: the default
   bool finish = false;
+  std::uint64_t seed = 1;
   int iouSamples = 200000;
   double timeLimit = 0.0;
   Method method = Method::Hybrid;
@@ -213,7 +217,7 @@ Result runModel(const Options& opt, const std::string& model) {
     if (opt.refineSearches > 0) ro.hybrid.searches = opt.refineSearches;
     if (opt.refineStall > 0) ro.hybrid.evolve.stallGenerations = opt.refineStall;
     ro.finish.enabled = opt.finish;
-    ro.seed = 1;
+    ro.seed = opt.seed;
     ro.timeLimit = opt.timeLimit;
     ro.method = opt.method;
     const auto t0 = std::chrono::steady_clock::now();
@@ -390,7 +394,7 @@ int usage(const char* argv0) {
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin] "
                "[--no-unsupported-regions] [--finish] [--refine-searches K] "
-               "[--refine-stall S] [--keep OUTDIR]\n",
+               "[--refine-stall S] [--seed S] [--keep OUTDIR]\n",
                argv0);
   return 2;
 }
@@ -418,6 +422,8 @@ int main(int argc, char** argv) {
       opt.refineSearches = std::size_t(std::max(1, std::atoi(argv[++i])));
     } else if (arg == "--refine-stall" && hasValue) {
       opt.refineStall = std::size_t(std::max(1, std::atoi(argv[++i])));
+    } else if (arg == "--seed" && hasValue) {
+      opt.seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--models" && hasValue) {
       opt.models = splitList(argv[++i]);
     } else if (arg == "--keep" && hasValue) {
@@ -462,6 +468,7 @@ int main(int argc, char** argv) {
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
       std::string(methodName(opt.method)).c_str(), limitText,
       opt.refineThin ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
+  if (opt.seed != 1) std::printf("reconstruction seed: %llu\n", (unsigned long long)opt.seed);
   if (opt.refineSearches > 0 || opt.refineStall > 0)
     std::printf("hybrid searches per region: %zu, stall: %zu generations (0: the default)\n",
                 opt.refineSearches, opt.refineStall);
