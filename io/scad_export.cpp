@@ -1,11 +1,13 @@
 #include "io/scad_export.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <ostream>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <variant>
 
 #include "core/export_extent.h"
 #include "io/file_util.h"
@@ -49,9 +51,55 @@ std::string rotateEuler(const Mat3& r) {
   return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
 }
 
+// `p` with every face moved out by `m` (a cone keeps its slope).
+Primitive grown(const Primitive& p, double m) {
+  PrimitiveShape s = p.shape();
+  if (auto* h = std::get_if<HalfSpace>(&s)) {
+    h->offset += m;
+  } else if (auto* b = std::get_if<Box>(&s)) {
+    b->halfSize.array() += m;
+  } else if (auto* c = std::get_if<Cylinder>(&s)) {
+    c->radius += m;
+    c->height += 2.0 * m;
+  } else if (auto* k = std::get_if<Cone>(&s)) {
+    const double slope = (k->radiusTop - k->radiusBottom) / k->height;
+    k->radiusBottom = std::max(0.0, k->radiusBottom - slope * m) + m;
+    k->radiusTop = std::max(0.0, k->radiusTop + slope * m) + m;
+    k->height += 2.0 * m;
+  } else if (auto* sp = std::get_if<Sphere>(&s)) {
+    sp->radius += m;
+  } else if (auto* t = std::get_if<Torus>(&s)) {
+    t->minorRadius += m;
+  }
+  return Primitive(s);
+}
+
+// The leaves that add material (reached through an even number of
+// differences' cutters and complements) and those that remove it.
+void collectUses(const Node& n, bool removes, std::set<const Node*>& adds,
+                 std::set<const Node*>& removed) {
+  switch (n.kind) {
+    case NodeKind::Primitive:
+      (removes ? removed : adds).insert(&n);
+      return;
+    case NodeKind::Complement:
+      collectUses(*n.children.front(), !removes, adds, removed);
+      return;
+    case NodeKind::Difference:
+      for (std::size_t i = 0; i < n.children.size(); ++i) {
+        collectUses(*n.children[i], i == 0 ? removes : !removes, adds, removed);
+      }
+      return;
+    default:
+      for (const NodePtr& c : n.children) collectUses(*c, removes, adds, removed);
+  }
+}
+
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
+  // The grown module of each leaf that both adds and removes material.
+  const std::unordered_map<const Node*, std::string>& cutNames;
   Aabb part;           // the part's extent (exportExtent)
   double bigSize = 0;  // edge of the cubes standing in for unbounded sets
 
@@ -91,22 +139,25 @@ struct Writer {
     return "";
   }
 
-  void node(const Node& n, int indent) const {
+  void node(const Node& n, int indent, bool removes) const {
     const std::string pad(std::size_t(2 * indent), ' ');
     switch (n.kind) {
       case NodeKind::Primitive:
-        out << pad << names.at(&n) << "();\n";
+        out << pad << (removes && cutNames.count(&n) ? cutNames.at(&n) : names.at(&n)) << "();\n";
         return;
       case NodeKind::Complement:
         out << pad << "difference() {\n"
             << pad << "  " << cube(surroundingCube(part, bigSize))
             << "  // everything around the part\n";
-        node(*n.children.front(), indent + 1);
+        node(*n.children.front(), indent + 1, !removes);
         out << pad << "}\n";
         return;
       default:
         out << pad << nodeKindName(n.kind) << "() {\n";
-        for (const NodePtr& c : n.children) node(*c, indent + 1);
+        for (std::size_t i = 0; i < n.children.size(); ++i) {
+          const bool cutter = n.kind == NodeKind::Difference && i > 0;
+          node(*n.children[i], indent + 1, cutter ? !removes : removes);
+        }
         out << pad << "}\n";
     }
   }
@@ -117,17 +168,45 @@ struct Writer {
 void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options) {
   const Aabb part = exportExtent(tree);
   const auto names = leafNames(tree);
-  Writer w{out, names, part, options.halfSpaceScale * std::max(part.diagonal(), 1e-9)};
+  std::set<const Node*> adds, removes;
+  collectUses(*tree.root(), false, adds, removes);
+  const double overcut = options.overcut * part.diagonal();
+  std::unordered_map<const Node*, std::string> cutNames;
+  std::set<std::string> taken;
+  for (const auto& [leaf, name] : names) taken.insert(name);
+  for (const Node* leaf : tree.leaves()) {  // in the tree's order, so names are stable
+    if (!(overcut > 0.0) || !adds.count(leaf) || !removes.count(leaf) || cutNames.count(leaf)) {
+      continue;
+    }
+    std::string name = names.at(leaf) + "_cut";
+    for (int k = 1; taken.count(name); ++k) name = names.at(leaf) + "_cut_" + std::to_string(k);
+    taken.insert(name);
+    cutNames[leaf] = name;
+  }
+  Writer w{out, names, cutNames, part, options.halfSpaceScale * std::max(part.diagonal(), 1e-9)};
   out << "// CSG tree written by csgvox. Units are those of the scan.\n"
-      << "// Each primitive is a module below; the solid is the expression at the end.\n"
-      << "$fn = " << options.facets << ";\n\n";
+      << "// Each primitive is a module below; the solid is the expression at the end.\n";
+  if (overcut > 0.0 && !removes.empty()) {
+    out << "// Primitives that cut are written " << formatNumber(overcut)
+        << " larger on every side, so that a hole\n"
+           "// ending on the face it goes through leaves no film of that face.\n";
+  }
+  out << "$fn = " << options.facets << ";\n\n";
   std::set<const Node*> seen;
   for (const Node* leaf : tree.leaves()) {
     if (!seen.insert(leaf).second) continue;
-    out << "module " << names.at(leaf) << "() " << w.body(leaf->primitive) << "\n";
+    const std::string& name = names.at(leaf);
+    const bool cuts = overcut > 0.0 && removes.count(leaf) > 0;
+    if (adds.count(leaf) || !cuts) {
+      out << "module " << name << "() " << w.body(leaf->primitive) << "\n";
+    }
+    if (cuts) {
+      out << "module " << (cutNames.count(leaf) ? cutNames.at(leaf) : name) << "() "
+          << w.body(grown(leaf->primitive, overcut)) << "\n";
+    }
   }
   out << "\n";
-  w.node(*tree.root(), 0);
+  w.node(*tree.root(), 0, false);
 }
 
 void writeScad(const std::filesystem::path& path, const CsgTree& tree, const ScadOptions& options) {

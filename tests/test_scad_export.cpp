@@ -22,10 +22,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string scadText(const CsgTree& tree) {
+std::string scadText(const CsgTree& tree, const ScadOptions& options = {}) {
   std::ostringstream s;
-  writeScad(s, tree);
+  writeScad(s, tree, options);
   return s.str();
+}
+
+ScadOptions noOvercut() {
+  ScadOptions o;
+  o.overcut = 0.0;
+  return o;
 }
 
 CsgTree plate() {
@@ -36,7 +42,7 @@ CsgTree plate() {
 }
 
 TEST(ScadExport, OneNamedModulePerPrimitiveThenTheExpression) {
-  const std::string s = scadText(plate());
+  const std::string s = scadText(plate(), noOvercut());
   EXPECT_NE(s.find("module plate() translate([0, 0, 2.5]) cube([80, 60, 5], center = true);\n"),
             std::string::npos)
       << s;
@@ -47,6 +53,53 @@ TEST(ScadExport, OneNamedModulePerPrimitiveThenTheExpression) {
   EXPECT_NE(s.find("module hole_1() translate([-30, 20, 2.5])"), std::string::npos) << s;
   EXPECT_NE(s.find("difference() {\n  plate();\n  hole();\n  hole_1();\n}\n"), std::string::npos)
       << s;
+}
+
+// What removes material is written larger by the overcut (a fraction of
+// the part's diagonal) on every side; what adds material is written as it
+// is; a primitive that does both gets a second, grown module for its cuts.
+TEST(ScadExport, CuttersAreWrittenGrownByTheOvercut) {
+  const double m = 1e-6 * plate().bounds().diagonal();
+  const std::string s = scadText(plate());
+  EXPECT_NE(s.find("module plate() translate([0, 0, 2.5]) cube([80, 60, 5], center = true);\n"),
+            std::string::npos)
+      << s;
+  EXPECT_NE(s.find("module hole() translate([30, 20, 2.5]) cylinder(h = " +
+                   formatNumber(7 + 2 * m) + ", r = " + formatNumber(4 + m) + ", center = true);"),
+            std::string::npos)
+      << s;
+  EXPECT_NE(s.find("difference() {\n  plate();\n  hole();\n  hole_1();\n}\n"), std::string::npos)
+      << s;
+
+  // A cutter of a cutter adds material: a box less a ring (a disc less a
+  // smaller disc) keeps the inner disc.
+  const CsgTree disc = CsgTree::leaf(Cylinder{Vec3::Zero(), Vec3::UnitZ(), 1, 4}, "disc");
+  const CsgTree ring = CsgTree::subtract(
+      {CsgTree::leaf(Cylinder{Vec3::Zero(), Vec3::UnitZ(), 2, 4}, "outer"), disc});
+  const CsgTree t = CsgTree::unite(
+      {CsgTree::subtract(
+           {CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(3, 3, 1)}, "block"), ring}),
+       CsgTree::subtract(
+           {CsgTree::leaf(Box{Vec3(0, 0, 3), Mat3::Identity(), Vec3(3, 3, 1)}, "lid"), disc})});
+  const double d = 1e-6 * t.bounds().diagonal();
+  const std::string r = scadText(t);
+  EXPECT_NE(r.find("module outer() cylinder(h = " + formatNumber(4 + 2 * d) +
+                   ", r = " + formatNumber(2 + d) + ", center = true);"),
+            std::string::npos)
+      << r;
+  // The disc adds inside the ring and removes from the lid: two modules.
+  EXPECT_NE(r.find("module disc() cylinder(h = 4, r = 1, center = true);"), std::string::npos) << r;
+  EXPECT_NE(r.find("module disc_cut() cylinder(h = " + formatNumber(4 + 2 * d) +
+                   ", r = " + formatNumber(1 + d) + ", center = true);"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("difference() {\n      outer();\n      disc();\n    }"), std::string::npos) << r;
+  EXPECT_NE(r.find("difference() {\n    lid();\n    disc_cut();\n  }"), std::string::npos) << r;
+  // With no overcut, nothing is grown and no second module is needed.
+  const std::string z = scadText(t, noOvercut());
+  EXPECT_NE(z.find("module outer() cylinder(h = 4, r = 2, center = true);"), std::string::npos)
+      << z;
+  EXPECT_EQ(z.find("disc_cut();"), std::string::npos) << z;
 }
 
 TEST(ScadExport, AxisAlignedBoxesWithPermutedAxesNeedNoRotation) {
@@ -143,6 +196,32 @@ double openScadIouAgainstTree(const CsgTree& tree, const std::string& name) {
       [&](const Vec3& p) { return tree.contains(p); }, 200000, 3);
   fs::remove_all(dir);
   return iou;
+}
+
+// A flange's plate and three of its bolt holes as fitted to the noisy scan
+// data/flange/scan_noisy.ply: two holes end on both of the plate's faces,
+// one on its top face, to the last bits of the fit. Written as they are,
+// OpenSCAD's exact booleans left a film of a face across a hole (an extra
+// volume in its log, and IoU 0.989 against the mesh of the main job's
+// tree); the overcut opens them.
+TEST(ScadRendersTheSameSolidWith, HolesThatEndOnTheFacesTheyGoThrough) {
+  if (!haveOpenScad()) GTEST_SKIP() << "openscad is not installed";
+  const Vec3 up(-0.0002312274085214225, 7.324411988004418e-05, 0.9999999705845918);
+  const double r = 4.931239233598219;
+  const CsgTree t = CsgTree::subtract(
+      {CsgTree::leaf(Cylinder{Vec3(-0.020803035320374887, 0.004036445965827896, 5.968504581766771),
+                              up, 50.01573130326098, 12.008915724373828},
+                     "plate"),
+       CsgTree::leaf(Cylinder{Vec3(32.99509836910849, -19.02802555797279, 5.977532749985064), up, r,
+                              12.008915724373828},
+                     "hole"),
+       CsgTree::leaf(Cylinder{Vec3(-32.930931076999336, 19.07464027877664, 5.959498048287339), up,
+                              r, 12.008915724373828},
+                     "hole"),
+       CsgTree::leaf(Cylinder{Vec3(-0.07631421648536403, 38.039799463441206, 6.873603059170291),
+                              -up, r, 13.824710089318678},
+                     "hole")});
+  EXPECT_GE(openScadIouAgainstTree(t, "holes-on-faces"), 0.99);
 }
 
 TEST(ScadRendersTheSameSolidWith, PrimitivesNamedAfterOpenScadBuiltIns) {
