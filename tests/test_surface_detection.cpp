@@ -432,6 +432,58 @@ TEST(SurfaceRefinement, FitsAnExactCylinderFromARoughStart) {
   EXPECT_TRUE(s.convex);
 }
 
+// The fit minimises the sum of the points' Huber losses, (d/sigma)^2 up to
+// the loss scale and linear beyond, whatever the number of points: the
+// optimum is checked here against the objective computed independently, so
+// far outliers pull the plane by little (a least-squares fit would move its
+// offset by ~0.1), and nudging the fitted plane never lowers the objective.
+TEST(SurfaceRefinement, AFitMinimisesThePointsHuberLossesAtAnyPointCount) {
+  FitScales scales;
+  scales.position = 0.01;
+  scales.normal = 0.0;  // distances only, so the objective is easy to state
+  scales.loss = 0.03;
+  const double a = scales.loss / scales.position;
+  const auto objective = [&](const PointCloud& cloud, const Vec3& n, double offset) {
+    double sum = 0.0;
+    for (const Vec3& p : cloud.points) {
+      const double s = std::pow((n.dot(p) - offset) / scales.position, 2);
+      sum += s <= a * a ? s : 2.0 * a * std::sqrt(s) - a * a;
+    }
+    return sum;
+  };
+  for (const int count : {13, 203, 800}) {
+    Rng rng{std::uint64_t(count)};
+    const Mat3 frame = randomRotation(rng);
+    const Vec3 normal = frame.col(2), origin(1, -2, 0.5);
+    PointCloud cloud;
+    for (int i = 0; i < count; ++i) {
+      const double u = uniform(rng, -2.0, 2.0), v = uniform(rng, -2.0, 2.0);
+      // Every tenth point far off the plane, the others within the noise.
+      const double h = i % 10 == 3 ? 1.0 : uniform(rng, -0.01, 0.01);
+      cloud.points.push_back(origin + u * frame.col(0) + v * frame.col(1) + h * normal);
+      cloud.normals.push_back(normal);
+    }
+    std::vector<std::uint32_t> all(cloud.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = std::uint32_t(i);
+    Surface s;
+    s.shape = PlaneSurface{(normal + Vec3(0.02, -0.01, 0.03)).normalized(), normal.dot(origin)};
+    ASSERT_GE(fitSurface(cloud, all, s, scales), 0.0) << count;
+    const auto& fit = *s.as<PlaneSurface>();
+    const double sign = fit.normal.dot(normal) > 0.0 ? 1.0 : -1.0;
+    EXPECT_LT(std::abs(sign * fit.offset - normal.dot(origin)), 0.02) << count;
+    const double best = objective(cloud, fit.normal, fit.offset);
+    for (const double step : {1e-3, -1e-3}) {
+      EXPECT_GE(objective(cloud, fit.normal, fit.offset + step), best) << count;
+      for (int k = 0; k < 3; ++k) {
+        Vec3 tilted = fit.normal;
+        tilted[k] += step;
+        tilted.normalize();
+        EXPECT_GE(objective(cloud, tilted, fit.offset), best) << count << " axis " << k;
+      }
+    }
+  }
+}
+
 // A lug's flat side that detection took as a wide cylinder (together with a
 // strip of the round next to it) is a plane once only its own points are
 // left: the refinement gives the plane, not a cylinder of radius far beyond
