@@ -31,6 +31,7 @@
 /// no reordered reductions.
 /// Check a new ISA file with `nm -C file.o`: one global symbol, no weak ones.
 
+#include <array>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -51,6 +52,20 @@ enum class SimdLevel : int {
 /// The highest level this CPU and operating system support (AVX state
 /// enabled by the OS included). Detected on the first call; thread-safe.
 SimdLevel detectedSimdLevel();
+
+/// Per level (index: the level), the kernel of the highest level at or
+/// below it that both this CPU and the build have: `avx2` and `avx512` are
+/// the ISA files' exports, called only where the CPU has their level and
+/// returning null where the build has no flags for it. `Kernel` is a
+/// pointer (a kernel function or a table of kernels).
+template <class Kernel>
+std::array<Kernel, 3> kernelsByLevel(Kernel portable, Kernel (*avx2)(), Kernel (*avx512)()) {
+  const SimdLevel cpu = detectedSimdLevel();
+  const Kernel builtAvx2 = cpu >= SimdLevel::Avx2 ? avx2() : nullptr;
+  const Kernel builtAvx512 = cpu >= SimdLevel::Avx512 ? avx512() : nullptr;
+  const Kernel upToAvx2 = builtAvx2 ? builtAvx2 : portable;
+  return {portable, upToAvx2, builtAvx512 ? builtAvx512 : upToAvx2};
+}
 
 /// The level the kernels use now: the one set by setSimdLevel(), else the
 /// one named by the environment variable CSGVOX_SIMD (`portable`, `avx2` or

@@ -59,14 +59,9 @@ void emit(const Node& node, const PrimitiveLibrary& library, std::vector<Instr>&
 }  // namespace
 
 MinMaxChunkKernel minMaxKernel(SimdLevel level) {
-  switch (level) {
-    case SimdLevel::Avx512:
-      return minMaxChunkAvx512;
-    case SimdLevel::Avx2:
-      return minMaxChunkAvx2;
-    default:
-      return minMaxChunkPortable;
-  }
+  static const auto table =
+      kernelsByLevel(portableMinMaxChunk(), avx2MinMaxChunk, avx512MinMaxChunk);
+  return table[std::size_t(std::clamp(int(level), 0, int(table.size()) - 1))];
 }
 
 namespace {

@@ -46,7 +46,8 @@ struct TermSums {
   double normal = 0.0;
 };
 
-/// The min/max chunk kernel compiled for `level` (capped to none above it).
+/// The min/max chunk kernel of `level`, or of the highest level below it
+/// that the CPU and the build have.
 MinMaxChunkKernel minMaxKernel(SimdLevel level);
 
 /// The point terms of a program with the given set operations.

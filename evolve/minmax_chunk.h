@@ -54,15 +54,12 @@ struct MinMaxChunk {
 using MinMaxChunkKernel = void (*)(const MinMaxChunk& k, std::size_t start, std::size_t m,
                                    double* sums);
 
-void minMaxChunkPortable(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
-void minMaxChunkAvx2(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
-void minMaxChunkAvx512(const MinMaxChunk& k, std::size_t start, std::size_t m, double* sums);
-
-/// Whether minMaxChunkAvx2 / minMaxChunkAvx512 were compiled with their
-/// level's flags (cmake/csgvox_simd.cmake). False where the build gives none
-/// (not x86-64, or not GCC or Clang): the kernel is then the portable one
-/// under that name. Safe to call on any CPU.
-bool minMaxChunkAvx2Built();
-bool minMaxChunkAvx512Built();
+/// The kernel of each level, one per ISA file (core/cpu_features.h): the
+/// vector ones are null where the build gives no flags for their level (not
+/// x86-64, or not GCC or Clang). Calling a vector kernel needs a CPU with
+/// its level; taking it does not.
+MinMaxChunkKernel portableMinMaxChunk();
+MinMaxChunkKernel avx2MinMaxChunk();
+MinMaxChunkKernel avx512MinMaxChunk();
 
 }  // namespace csgvox::fitness_detail

@@ -1,18 +1,20 @@
-// The min/max chunk kernel compiled for avx512 (evolve/minmax_chunk.h); without
-// the instruction set's flags it is the portable kernel under this name.
+// The min/max chunk kernel compiled with the AVX-512 flags
+// (cmake/csgvox_simd.cmake; evolve/minmax_chunk.h); its export is null where
+// the build gives no such flags.
 #include "evolve/minmax_chunk.h"
 
-#define CSGVOX_MINMAX_CHUNK minMaxChunkAvx512
+#if defined(__AVX512F__)
+
 #include "evolve/minmax_chunk.inc"
 
-namespace csgvox::fitness_detail {
-
-bool minMaxChunkAvx512Built() {
-#if defined(__AVX512F__)
-  return true;
-#else
-  return false;
-#endif
+csgvox::fitness_detail::MinMaxChunkKernel csgvox::fitness_detail::avx512MinMaxChunk() {
+  return &minMaxChunk;
 }
 
-}  // namespace csgvox::fitness_detail
+#else
+
+csgvox::fitness_detail::MinMaxChunkKernel csgvox::fitness_detail::avx512MinMaxChunk() {
+  return nullptr;
+}
+
+#endif

@@ -74,24 +74,22 @@ Primitive grown(const Primitive& p, double m) {
   return Primitive(s);
 }
 
+// Whether child i of `n` removes what it holds from the rest: a
+// difference's operands after the first, and the operand of a complement.
+bool subtracts(const Node& n, std::size_t i) {
+  return n.kind == NodeKind::Complement || (n.kind == NodeKind::Difference && i > 0);
+}
+
 // The leaves that add material (reached through an even number of
-// differences' cutters and complements) and those that remove it.
+// subtracting children) and those that remove it.
 void collectUses(const Node& n, bool removes, std::set<const Node*>& adds,
                  std::set<const Node*>& removed) {
-  switch (n.kind) {
-    case NodeKind::Primitive:
-      (removes ? removed : adds).insert(&n);
-      return;
-    case NodeKind::Complement:
-      collectUses(*n.children.front(), !removes, adds, removed);
-      return;
-    case NodeKind::Difference:
-      for (std::size_t i = 0; i < n.children.size(); ++i) {
-        collectUses(*n.children[i], i == 0 ? removes : !removes, adds, removed);
-      }
-      return;
-    default:
-      for (const NodePtr& c : n.children) collectUses(*c, removes, adds, removed);
+  if (n.kind == NodeKind::Primitive) {
+    (removes ? removed : adds).insert(&n);
+    return;
+  }
+  for (std::size_t i = 0; i < n.children.size(); ++i) {
+    collectUses(*n.children[i], removes != subtracts(n, i), adds, removed);
   }
 }
 
@@ -149,14 +147,13 @@ struct Writer {
         out << pad << "difference() {\n"
             << pad << "  " << cube(surroundingCube(part, bigSize))
             << "  // everything around the part\n";
-        node(*n.children.front(), indent + 1, !removes);
+        node(*n.children.front(), indent + 1, removes != subtracts(n, 0));
         out << pad << "}\n";
         return;
       default:
         out << pad << nodeKindName(n.kind) << "() {\n";
         for (std::size_t i = 0; i < n.children.size(); ++i) {
-          const bool cutter = n.kind == NodeKind::Difference && i > 0;
-          node(*n.children[i], indent + 1, cutter ? !removes : removes);
+          node(*n.children[i], indent + 1, removes != subtracts(n, i));
         }
         out << pad << "}\n";
     }
@@ -175,9 +172,8 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
   std::set<std::string> taken;
   for (const auto& [leaf, name] : names) taken.insert(name);
   for (const Node* leaf : tree.leaves()) {  // in the tree's order, so names are stable
-    if (!(overcut > 0.0) || !adds.count(leaf) || !removes.count(leaf) || cutNames.count(leaf)) {
-      continue;
-    }
+    if (!(overcut > 0.0) || !adds.count(leaf) || !removes.count(leaf)) continue;
+    if (cutNames.count(leaf)) continue;  // a leaf the tree shares
     std::string name = names.at(leaf) + "_cut";
     for (int k = 1; taken.count(name); ++k) name = names.at(leaf) + "_cut_" + std::to_string(k);
     taken.insert(name);

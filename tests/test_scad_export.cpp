@@ -95,6 +95,15 @@ TEST(ScadExport, CuttersAreWrittenGrownByTheOvercut) {
       << r;
   EXPECT_NE(r.find("difference() {\n      outer();\n      disc();\n    }"), std::string::npos) << r;
   EXPECT_NE(r.find("difference() {\n    lid();\n    disc_cut();\n  }"), std::string::npos) << r;
+  // What a complement holds removes material too.
+  const CsgTree c =
+      CsgTree::intersect({CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(3, 3, 1)}, "slab"),
+                          CsgTree::complement(CsgTree::leaf(Sphere{Vec3::Zero(), 1}, "ball"))});
+  const double e = 1e-6 * c.bounds().diagonal();
+  const std::string cs = scadText(c);
+  EXPECT_NE(cs.find("module ball() sphere(r = " + formatNumber(1 + e) + ");"), std::string::npos)
+      << cs;
+  EXPECT_NE(cs.find("module slab() cube([6, 6, 2], center = true);"), std::string::npos) << cs;
   // With no overcut, nothing is grown and no second module is needed.
   const std::string z = scadText(t, noOvercut());
   EXPECT_NE(z.find("module outer() cylinder(h = 4, r = 2, center = true);"), std::string::npos)

@@ -48,13 +48,7 @@ constinit const BitsetKernels kPortable = bitset_loops::bitsetKernelsOf<Portable
 // Index: the level; each entry the kernels of the highest level ≤ it that
 // the CPU supports and the build has.
 const std::array<const BitsetKernels*, 3>& kernelsByLevel() {
-  static const auto table = [] {
-    const SimdLevel cpu = detectedSimdLevel();
-    const BitsetKernels* avx2 = cpu >= SimdLevel::Avx2 ? avx2BitsetKernels() : nullptr;
-    const BitsetKernels* avx512 = cpu >= SimdLevel::Avx512 ? avx512BitsetKernels() : nullptr;
-    const BitsetKernels* upToAvx2 = avx2 ? avx2 : &kPortable;
-    return std::array<const BitsetKernels*, 3>{&kPortable, upToAvx2, avx512 ? avx512 : upToAvx2};
-  }();
+  static const auto table = kernelsByLevel(&kPortable, avx2BitsetKernels, avx512BitsetKernels);
   return table;
 }
 
