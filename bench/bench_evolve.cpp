@@ -47,17 +47,40 @@ void boxScan(std::size_t n, std::vector<Vec3>& points, std::vector<Vec3>& normal
   }
 }
 
-// The box's six planes and a few distractors.
-PrimitiveLibrary boxLibrary() {
-  return test::cubePlanes({Sphere{Vec3(1, 1, 1), 0.5},
-                           Cylinder{Vec3::Zero(), Vec3::UnitZ(), 0.3, 4.0},
-                           HalfSpace{Vec3(1, 1, 0).normalized(), 1.2}, Sphere{Vec3::Zero(), 1.5}});
+// The box's six planes and distractors: 10 primitives in all, or `size`
+// with seeded random spheres, cylinders and planes added (the libraries of
+// the hybrid's regions hold 20 to 60).
+PrimitiveLibrary boxLibrary(std::size_t size = 10) {
+  std::vector<Primitive> extra{Sphere{Vec3(1, 1, 1), 0.5},
+                               Cylinder{Vec3::Zero(), Vec3::UnitZ(), 0.3, 4.0},
+                               HalfSpace{Vec3(1, 1, 0).normalized(), 1.2}, Sphere{Vec3::Zero(), 1.5}};
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), r(0.1, 0.8);
+  while (extra.size() + 6 < size) {
+    const Vec3 c(u(rng), u(rng), u(rng));
+    const Vec3 d = Vec3(u(rng), u(rng), u(rng)).normalized();
+    switch (extra.size() % 3) {
+      case 0:
+        extra.push_back(Sphere{c, r(rng)});
+        break;
+      case 1:
+        extra.push_back(Cylinder{c, d, r(rng), 4.0});
+        break;
+      default:
+        extra.push_back(HalfSpace{d, u(rng)});
+        break;
+    }
+  }
+  return test::cubePlanes(std::move(extra));
 }
 
-void fitnessRate(std::size_t n, SetOperationKind ops, const char* name, bool quick) {
+// On one thread: the kernels' own speed.
+void fitnessRate(std::size_t n, std::size_t primitives, SetOperationKind ops, const char* name,
+                 bool quick) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
   std::vector<Vec3> points, normals;
   boxScan(n, points, normals);
-  const PrimitiveLibrary library = boxLibrary();
+  const PrimitiveLibrary library = boxLibrary(primitives);
   FitnessOptions fo;
   fo.operations = ops;
   const FitnessModel model(points, normals, 2.0 * std::sqrt(3.0), library, fo);
@@ -68,15 +91,23 @@ void fitnessRate(std::size_t n, SetOperationKind ops, const char* name, bool qui
     trees.push_back(randomTree(rng, library, 5, 0.8));
     nodes += trees.back().nodeCount();
   }
+  std::vector<const CsgTree*> all;
+  for (const CsgTree& t : trees) all.push_back(&t);
   const int rounds = quick ? 1 : (n > 50000 ? 3 : 20);
-  const Clock::time_point t0 = Clock::now();
   double sink = 0.0;
+  Clock::time_point t0 = Clock::now();
   for (int r = 0; r < rounds; ++r) {
     for (const CsgTree& t : trees) sink += model.evaluate(t).total;
   }
-  const double s = seconds(t0) / rounds;
-  std::printf("| %s | %zu | %.1f | %.1f | %.3g |\n", name, n, double(nodes) / 150.0,
-              1e6 * s / 150.0, double(n) * double(nodes) / s);
+  const double one = seconds(t0) / rounds;
+  t0 = Clock::now();
+  for (int r = 0; r < rounds; ++r) {
+    for (const Fitness& f : model.evaluate(all)) sink += f.total;
+  }
+  const double together = seconds(t0) / rounds;
+  std::printf("| %s | %zu | %zu | %.1f | %.1f | %.3g | %.1f | %.3g |\n", name, n, primitives,
+              double(nodes) / 150.0, 1e6 * one / 150.0, double(n) * double(nodes) / one,
+              1e6 * together / 150.0, double(n) * double(nodes) / together);
   if (sink == 0.123) std::printf(" ");
 }
 
@@ -104,12 +135,15 @@ int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   std::printf("instruction set: %s (CSGVOX_SIMD=portable|avx2|avx512 chooses)\n\n",
               std::string(simdLevelName(simdLevel())).c_str());
-  std::printf("Fitness of 150 random trees (10 primitives, depth <= 5)\n\n");
-  std::printf("| operations | points | mean nodes | us per tree | points x nodes per s |\n");
-  std::printf("| --- | ---: | ---: | ---: | ---: |\n");
+  std::printf("Fitness of 150 random trees (depth <= 5), one thread\n\n");
+  std::printf(
+      "| operations | points | primitives | mean nodes | us per tree, one by one | points x nodes "
+      "per s | us per tree, 150 together | points x nodes per s |\n");
+  std::printf("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::size_t n : {std::size_t(10000), std::size_t(100000)}) {
-    fitnessRate(n, SetOperationKind::MinMax, "min/max", quick);
-    fitnessRate(n, SetOperationKind::RFunction, "R-function", quick);
+    fitnessRate(n, 10, SetOperationKind::MinMax, "min/max", quick);
+    fitnessRate(n, 50, SetOperationKind::MinMax, "min/max", quick);
+    fitnessRate(n, 10, SetOperationKind::RFunction, "R-function", quick);
   }
   std::printf("\nOne generation, population 150 (includes variation, caching, ranking)\n\n");
   std::printf(

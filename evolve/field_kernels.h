@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/cpu_features.h"
@@ -50,8 +51,13 @@ struct TermSums {
 /// that the CPU and the build have.
 MinMaxChunkKernel minMaxKernel(SimdLevel level);
 
-/// The point terms of a program with the given set operations.
-TermSums pointTerms(const Program& program, const PointTables& tables, SetOperationKind ops);
+/// The point terms of each program with the given set operations. With
+/// min/max, every chunk of points is read once for all the programs (the
+/// cached arrays of a large library do not fit in the cache; one chunk's do);
+/// each program's sums are the same, bit for bit, as when run alone and
+/// whatever the number of threads.
+std::vector<TermSums> pointTerms(std::span<const Program> programs, const PointTables& tables,
+                                 SetOperationKind ops);
 
 /// |T △ L|: voxels where the program's solid (from the primitives' inside
 /// sets, [p][words]) and the labels disagree.

@@ -144,35 +144,45 @@ const FitnessOptions& FitnessModel::options() const { return data_->options; }
 double FitnessModel::sizeWeight() const { return data_->lambda; }
 
 Fitness FitnessModel::evaluate(const CsgTree& tree) const {
+  const CsgTree* one = &tree;
+  return evaluate(std::span<const CsgTree* const>(&one, 1)).front();
+}
+
+std::vector<Fitness> FitnessModel::evaluate(std::span<const CsgTree* const> trees) const {
   const Data& d = *data_;
-  const Program program = fitness_detail::compile(tree, d.library);
-  Fitness out;
-  out.nodes = tree.nodeCount();
-  fitness_detail::PointTables tables{d.n,
-                                     d.values.data(),
-                                     d.gradX.data(),
-                                     d.gradY.data(),
-                                     d.gradZ.data(),
-                                     d.normX.data(),
-                                     d.normY.data(),
-                                     d.normZ.data(),
-                                     d.distanceTerm.data(),
-                                     d.normalTerm.data(),
-                                     d.epsilon,
-                                     d.alpha,
-                                     d.radius};
-  const fitness_detail::TermSums sums =
-      fitness_detail::pointTerms(program, tables, d.options.operations);
-  out.distanceTerm = sums.distance;
-  out.normalTerm = sums.normal;
-  out.sizePenalty = d.lambda * double(out.nodes);
-  if (d.options.voxelWeight > 0.0) {
-    out.voxelMismatch = fitness_detail::voxelMismatch(program, d.insideSets.data(), d.labels.data(),
-                                                      d.words, d.lastWordMask);
-    out.voxelPenalty = d.options.voxelWeight * double(d.n) * double(out.voxelMismatch) /
+  std::vector<Program> programs;
+  programs.reserve(trees.size());
+  for (const CsgTree* tree : trees) programs.push_back(fitness_detail::compile(*tree, d.library));
+  const fitness_detail::PointTables tables{d.n,
+                                           d.values.data(),
+                                           d.gradX.data(),
+                                           d.gradY.data(),
+                                           d.gradZ.data(),
+                                           d.normX.data(),
+                                           d.normY.data(),
+                                           d.normZ.data(),
+                                           d.distanceTerm.data(),
+                                           d.normalTerm.data(),
+                                           d.epsilon,
+                                           d.alpha,
+                                           d.radius};
+  const std::vector<fitness_detail::TermSums> sums =
+      fitness_detail::pointTerms(programs, tables, d.options.operations);
+  std::vector<Fitness> out(trees.size());
+  tbb::parallel_for(std::size_t(0), trees.size(), [&](std::size_t j) {
+    Fitness& f = out[j];
+    f.nodes = trees[j]->nodeCount();
+    f.distanceTerm = sums[j].distance;
+    f.normalTerm = sums[j].normal;
+    f.sizePenalty = d.lambda * double(f.nodes);
+    if (d.options.voxelWeight > 0.0) {
+      f.voxelMismatch = fitness_detail::voxelMismatch(programs[j], d.insideSets.data(),
+                                                      d.labels.data(), d.words, d.lastWordMask);
+      f.voxelPenalty = d.options.voxelWeight * double(d.n) * double(f.voxelMismatch) /
                        double(std::max<std::size_t>(d.labelCount, 1));
-  }
-  out.total = out.distanceTerm + out.normalTerm - out.sizePenalty - out.voxelPenalty;
+    }
+    f.total = f.distanceTerm + f.normalTerm - f.sizePenalty - f.voxelPenalty;
+  });
   return out;
 }
 

@@ -78,6 +78,13 @@ class FitnessModel {
   /// @throw std::invalid_argument for an empty tree or a foreign leaf.
   Fitness evaluate(const CsgTree& tree) const;
 
+  /// E(t) of each tree, as evaluate(tree) gives it (bit for bit), computed
+  /// together: with min/max operations each chunk of the points' cached
+  /// arrays is read once for all the trees, which is several times faster
+  /// than one tree after another once the arrays outgrow the cache.
+  /// @throw std::invalid_argument as evaluate(tree).
+  std::vector<Fitness> evaluate(std::span<const CsgTree* const> trees) const;
+
   std::size_t pointCount() const;
   const PrimitiveLibrary& library() const;
   const FitnessOptions& options() const;

@@ -1,7 +1,5 @@
 #include "evolve/genetic_search.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <numeric>
@@ -22,7 +20,7 @@ struct Creature {
 
 // Fitness of every tree of a generation: trees already known (same structure
 // as a creature of the previous generation) are looked up, the others are
-// evaluated in parallel, each once.
+// evaluated together, each once.
 class Evaluator {
  public:
   explicit Evaluator(const FitnessModel* model) : model_(model) {}
@@ -50,10 +48,11 @@ class Evaluator {
       }
       if (sameAs[i] < 0) todo.push_back(i);
     }
-    tbb::parallel_for(std::size_t(0), todo.size(), [&](std::size_t k) {
-      Creature& c = creatures[todo[k]];
-      c.fitness = model_->evaluate(c.tree).total;
-    });
+    std::vector<const CsgTree*> trees;
+    trees.reserve(todo.size());
+    for (const std::size_t i : todo) trees.push_back(&creatures[i].tree);
+    const std::vector<Fitness> fitness = model_->evaluate(trees);
+    for (std::size_t k = 0; k < todo.size(); ++k) creatures[todo[k]].fitness = fitness[k].total;
     evaluations += todo.size();
     for (std::size_t i = 0; i < creatures.size(); ++i) {
       if (sameAs[i] >= 0) creatures[i].fitness = creatures[std::size_t(sameAs[i])].fitness;

@@ -2,6 +2,7 @@
 // direct per-point computation with CsgTree::evaluate.
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <numbers>
@@ -130,6 +131,68 @@ TEST(Fitness, EveryInstructionSetGivesTheSameSums) {
       EXPECT_EQ(f.distanceTerm, reference[t].distanceTerm) << simdLevelName(level) << " " << t;
       EXPECT_EQ(f.normalTerm, reference[t].normalTerm) << simdLevelName(level) << " " << t;
     }
+  }
+}
+
+// Trees evaluated together score as each does alone, bit for bit, whatever
+// the other trees, their order and the number of threads: each chunk's sums
+// are kept apart and added in chunk order. 70 trees (more than one task's
+// share) over 864 points (3 full chunks and a partial one), with the voxel
+// term, with min/max and with R-functions.
+TEST(Fitness, TreesEvaluatedTogetherScoreAsAlone) {
+  const test::OrientedPoints in = noisyCube(23);
+  const PrimitiveLibrary library = test::cubePlanes(
+      {Sphere{Vec3(0.3, 0.1, 0.0), 0.7}, Cylinder{Vec3::Zero(), Vec3::UnitX(), 0.4, 3.0}});
+  VoxelTarget target;
+  target.grid = VoxelGrid(Vec3::Constant(-1.5), Mat3::Identity(), 0.25, {12, 12, 12});
+  target.inside = VoxelSet(target.grid.voxelCount());
+  for (std::size_t v = 0; v < target.grid.voxelCount(); ++v) {
+    if (target.grid.center(v).cwiseAbs().maxCoeff() < 1.0) target.inside.set(v);
+  }
+  std::vector<CsgTree> trees = randomTrees(library, 29, 70, 6, 0.8);
+  for (std::size_t t = 0; t < trees.size(); t += 7) trees[t] = CsgTree::complement(trees[t]);
+  for (const SetOperationKind ops : {SetOperationKind::MinMax, SetOperationKind::RFunction}) {
+    FitnessOptions options;
+    options.operations = ops;
+    options.voxelWeight = 0.5;
+    const FitnessModel model(in.points, in.normals, kDiagonal, library, options, &target);
+    std::vector<Fitness> alone;
+    {
+      const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      for (const CsgTree& t : trees) alone.push_back(model.evaluate(t));
+    }
+    std::vector<const CsgTree*> forward, backward;
+    for (const CsgTree& t : trees) forward.push_back(&t);
+    backward.assign(forward.rbegin(), forward.rend());
+    const std::vector<Fitness> together = model.evaluate(forward);
+    const std::vector<Fitness> reversed = model.evaluate(backward);
+    ASSERT_EQ(together.size(), trees.size());
+    ASSERT_EQ(reversed.size(), trees.size());
+    for (std::size_t t = 0; t < trees.size(); ++t) {
+      const Fitness& r = reversed[trees.size() - 1 - t];
+      for (const Fitness* f : {&together[t], &r}) {
+        EXPECT_EQ(f->distanceTerm, alone[t].distanceTerm) << int(ops) << " tree " << t;
+        EXPECT_EQ(f->normalTerm, alone[t].normalTerm) << int(ops) << " tree " << t;
+        EXPECT_EQ(f->voxelMismatch, alone[t].voxelMismatch) << int(ops) << " tree " << t;
+        EXPECT_EQ(f->nodes, alone[t].nodes) << int(ops) << " tree " << t;
+        EXPECT_EQ(f->total, alone[t].total) << int(ops) << " tree " << t;
+      }
+    }
+    EXPECT_TRUE(model.evaluate(std::span<const CsgTree* const>()).empty());
+  }
+  // Still checked against the point-by-point computation.
+  const FitnessModel model(in.points, in.normals, kDiagonal, library);
+  std::vector<const CsgTree*> all;
+  for (const CsgTree& t : trees) all.push_back(&t);
+  const std::vector<Fitness> together = model.evaluate(all);
+  const double n = double(in.points.size());
+  const FitnessOptions& o = model.options();
+  for (std::size_t t = 0; t < trees.size(); t += 5) {
+    const auto [distance, normal] =
+        directTerms(trees[t], in, o.distanceTolerance * kDiagonal,
+                    o.angleTolerance * std::numbers::pi / 180.0, minMaxOperations());
+    EXPECT_NEAR(together[t].distanceTerm, distance, 1e-4 * n) << t;
+    EXPECT_NEAR(together[t].normalTerm, normal, 1e-4 * n) << t;
   }
 }
 
