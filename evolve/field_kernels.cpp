@@ -11,6 +11,7 @@
 #include "core/cpu_features.h"
 #include "core/sardf.h"
 #include "evolve/minmax_chunk.h"
+#include "voxel/bitset_kernels.h"
 
 namespace csgvox::fitness_detail {
 namespace {
@@ -314,54 +315,110 @@ std::vector<TermSums> pointTerms(std::span<const Program> programs, const PointT
   return out;
 }
 
-std::size_t voxelMismatch(const Program& program, const std::uint64_t* insideSets,
-                          const std::uint64_t* labels, std::size_t words,
-                          std::uint64_t lastWordMask) {
-  thread_local std::vector<std::uint64_t> stack;
-  if (stack.size() < program.stackDepth * words) stack.resize(program.stackDepth * words);
-  std::size_t top = 0;
+namespace {
+
+// Words of a voxel set a task takes at once (2 kB): a program's stack of
+// chunks stays in the core's cache.
+constexpr std::size_t kWordChunk = 256;
+
+// One (fused) program over the words [start, start + m) of the inside sets:
+// its solid's words in stack[0, m).
+void solidChunk(const Program& program, const std::uint64_t* insideSets, std::size_t words,
+                std::size_t start, std::size_t m, std::uint64_t* stack) {
+  std::size_t top = 0;  // entries on the stack
+  const auto entry = [&](std::size_t k) { return stack + k * kWordChunk; };
   for (const Instr& ins : program.code) {
-    std::uint64_t* w = stack.data() + top * words;
+    const std::uint64_t* src = insideSets + std::size_t(ins.leaf) * words + start;
     switch (ins.op) {
-      case Op::Leaf: {
-        const std::uint64_t* src = insideSets + std::size_t(ins.leaf) * words;
-        std::copy(src, src + words, w);
-        ++top;
+      case Op::Leaf:
+        std::copy(src, src + m, entry(top++));
         break;
-      }
       case Op::LeafNeg: {
-        const std::uint64_t* src = insideSets + std::size_t(ins.leaf) * words;
-        for (std::size_t i = 0; i < words; ++i) w[i] = ~src[i];
-        ++top;
+        std::uint64_t* w = entry(top++);
+        for (std::size_t i = 0; i < m; ++i) w[i] = ~src[i];
         break;
       }
-      case Op::Negate:
-        w -= words;
-        for (std::size_t i = 0; i < words; ++i) w[i] = ~w[i];
+      case Op::Negate: {
+        std::uint64_t* w = entry(top - 1);
+        for (std::size_t i = 0; i < m; ++i) w[i] = ~w[i];
         break;
+      }
       case Op::Min:
       case Op::Max: {
-        std::uint64_t* a = w - 2 * words;
-        const std::uint64_t* b = w - words;
+        std::uint64_t* w = entry(top - 2);
+        const std::uint64_t* b = entry(top - 1);
         if (ins.op == Op::Min) {
-          for (std::size_t i = 0; i < words; ++i) a[i] &= b[i];
+          for (std::size_t i = 0; i < m; ++i) w[i] &= b[i];
         } else {
-          for (std::size_t i = 0; i < words; ++i) a[i] |= b[i];
+          for (std::size_t i = 0; i < m; ++i) w[i] |= b[i];
         }
         --top;
         break;
       }
-      default:
-        throw std::logic_error("voxel fitness: fused instruction");
+      case Op::MinLeaf:
+      case Op::MinLeafNeg: {
+        std::uint64_t* w = entry(top - 1);
+        const std::uint64_t flip = ins.op == Op::MinLeafNeg ? ~0ull : 0ull;
+        for (std::size_t i = 0; i < m; ++i) w[i] &= src[i] ^ flip;
+        break;
+      }
+      case Op::MaxLeaf:
+      case Op::MaxLeafNeg: {
+        std::uint64_t* w = entry(top - 1);
+        const std::uint64_t flip = ins.op == Op::MaxLeafNeg ? ~0ull : 0ull;
+        for (std::size_t i = 0; i < m; ++i) w[i] |= src[i] ^ flip;
+        break;
+      }
     }
   }
-  std::size_t count = 0;
-  for (std::size_t i = 0; i + 1 < words; ++i)
-    count += std::size_t(std::popcount(stack[i] ^ labels[i]));
-  if (words > 0) {
-    count += std::size_t(std::popcount((stack[words - 1] ^ labels[words - 1]) & lastWordMask));
+}
+
+}  // namespace
+
+std::vector<std::size_t> voxelMismatch(std::span<const Program> programs,
+                                       const std::uint64_t* insideSets, const std::uint64_t* labels,
+                                       std::size_t words, std::uint64_t lastWordMask) {
+  const std::size_t count = programs.size();
+  const std::size_t chunks = (words + kWordChunk - 1) / kWordChunk;
+  std::vector<Program> code;
+  code.reserve(count);
+  std::size_t depth = 1;
+  for (const Program& p : programs) {
+    code.push_back(fused(p));
+    depth = std::max(depth, p.stackDepth);
   }
-  return count;
+  const BitsetKernels& bits = activeBitsetKernels();
+  // |T △ L| = |T| + |L| − 2 |T ∩ L| per chunk, with the hardware's popcount;
+  // the bits past the last voxel are masked off both.
+  const auto lastWord = [&](const std::uint64_t* w) { return w[words - 1] & lastWordMask; };
+  std::vector<std::size_t> labelCount(chunks);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const std::size_t start = c * kWordChunk, m = std::min(kWordChunk, words - start);
+    labelCount[c] = c + 1 < chunks ? bits.count(labels + start, m)
+                                   : bits.count(labels + start, m - 1) +
+                                         std::size_t(std::popcount(lastWord(labels)));
+  }
+  std::vector<std::size_t> partial(count * chunks);  // [program][chunk]
+  tbb::parallel_for(
+      tbb::blocked_range2d<std::size_t>(0, chunks, kChunksPerTask, 0, count, kProgramsPerTask),
+      [&](const tbb::blocked_range2d<std::size_t>& r) {
+        thread_local std::vector<std::uint64_t> stack;
+        if (stack.size() < depth * kWordChunk) stack.resize(depth * kWordChunk);
+        for (std::size_t c = r.rows().begin(); c != r.rows().end(); ++c) {
+          const std::size_t start = c * kWordChunk, m = std::min(kWordChunk, words - start);
+          for (std::size_t j = r.cols().begin(); j != r.cols().end(); ++j) {
+            solidChunk(code[j], insideSets, words, start, m, stack.data());
+            if (start + m == words) stack[m - 1] &= lastWordMask;
+            partial[j * chunks + c] = bits.count(stack.data(), m) + labelCount[c] -
+                                      2 * bits.countAnd(stack.data(), labels + start, m);
+          }
+        }
+      });
+  std::vector<std::size_t> out(count, 0);
+  for (std::size_t j = 0; j < count; ++j) {
+    for (std::size_t c = 0; c < chunks; ++c) out[j] += partial[j * chunks + c];
+  }
+  return out;
 }
 
 }  // namespace csgvox::fitness_detail

@@ -59,10 +59,11 @@ MinMaxChunkKernel minMaxKernel(SimdLevel level);
 std::vector<TermSums> pointTerms(std::span<const Program> programs, const PointTables& tables,
                                  SetOperationKind ops);
 
-/// |T △ L|: voxels where the program's solid (from the primitives' inside
-/// sets, [p][words]) and the labels disagree.
-std::size_t voxelMismatch(const Program& program, const std::uint64_t* insideSets,
-                          const std::uint64_t* labels, std::size_t words,
-                          std::uint64_t lastWordMask);
+/// |T △ L| of each program: voxels where the program's solid (from the
+/// primitives' inside sets, [p][words]) and the labels disagree. Like the
+/// point terms, each chunk of words is read once for all the programs.
+std::vector<std::size_t> voxelMismatch(std::span<const Program> programs,
+                                       const std::uint64_t* insideSets, const std::uint64_t* labels,
+                                       std::size_t words, std::uint64_t lastWordMask);
 
 }  // namespace csgvox::fitness_detail

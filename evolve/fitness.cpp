@@ -33,12 +33,17 @@ struct FitnessModel::Data {
   std::vector<float> normX, normY, normZ;  // [n] scan normals, smooth operations only
   std::vector<float> distanceTerm;         // [p][n] exp(−(f/εd)²)
   std::vector<float> normalTerm;           // [2p][n] exp(−(θ/α)²) for +f and −f
-  // Voxel term.
-  std::size_t words = 0;                  // words per voxel set
-  std::uint64_t lastWordMask = ~0ull;     // valid bits of the last word
-  std::vector<std::uint64_t> insideSets;  // [p][words]
-  std::vector<std::uint64_t> labels;      // [words]
-  std::size_t labelCount = 0;
+  double diagonal = 0.0;                   // D, scan units
+  // The voxel term (null without it); models of one library on other points
+  // share it.
+  struct Voxels {
+    std::size_t words = 0;                  // words per voxel set
+    std::uint64_t lastWordMask = ~0ull;     // valid bits of the last word
+    std::vector<std::uint64_t> insideSets;  // [p][words]
+    std::vector<std::uint64_t> labels;      // [words]
+    std::size_t labelCount = 0;
+  };
+  std::shared_ptr<const Voxels> voxels;
 };
 
 namespace {
@@ -53,11 +58,6 @@ float normalTermOf(double cosAngle, double alpha) {
 FitnessModel::FitnessModel(std::span<const Vec3> points, std::span<const Vec3> normals,
                            double diagonal, const PrimitiveLibrary& library,
                            const FitnessOptions& options, const VoxelTarget* target) {
-  if (points.size() != normals.size()) {
-    throw std::invalid_argument("FitnessModel: " + std::to_string(points.size()) + " points but " +
-                                std::to_string(normals.size()) + " normals");
-  }
-  if (points.empty()) throw std::invalid_argument("FitnessModel: no points");
   if (!(diagonal > 0.0) || !std::isfinite(diagonal)) {
     throw std::invalid_argument("FitnessModel: the diagonal must be > 0");
   }
@@ -67,10 +67,50 @@ FitnessModel::FitnessModel(std::span<const Vec3> points, std::span<const Vec3> n
   if (options.voxelWeight > 0.0 && target == nullptr) {
     throw std::invalid_argument("FitnessModel: the voxel term needs voxel labels");
   }
+  std::unique_ptr<Data> data = pointData(points, normals, diagonal, library, options);
+  if (options.voxelWeight > 0.0) {
+    const std::size_t voxels = target->grid.voxelCount();
+    if (target->inside.size() != voxels) {
+      throw std::invalid_argument("FitnessModel: the voxel labels do not match their grid");
+    }
+    auto v = std::make_shared<Data::Voxels>();
+    v->words = (voxels + 63) / 64;
+    v->lastWordMask = voxels % 64 == 0 ? ~0ull : (std::uint64_t(1) << (voxels % 64)) - 1;
+    v->labels.assign(target->inside.words().begin(), target->inside.words().end());
+    v->labelCount = target->inside.count();
+    v->insideSets.resize(data->p * v->words);
+    tbb::parallel_for(std::size_t(0), data->p, [&](std::size_t q) {
+      const VoxelSet inside = solidVoxels(library.leafTree(q), target->grid);
+      std::copy(inside.words().begin(), inside.words().end(), v->insideSets.begin() + q * v->words);
+    });
+    data->voxels = std::move(v);
+  }
+  data_ = std::move(data);
+}
+
+FitnessModel::FitnessModel(std::span<const Vec3> points, std::span<const Vec3> normals,
+                           const FitnessModel& other) {
+  const Data& o = *other.data_;
+  std::unique_ptr<Data> data = pointData(points, normals, o.diagonal, o.library, o.options);
+  data->voxels = o.voxels;
+  data_ = std::move(data);
+}
+
+std::unique_ptr<FitnessModel::Data> FitnessModel::pointData(std::span<const Vec3> points,
+                                                            std::span<const Vec3> normals,
+                                                            double diagonal,
+                                                            const PrimitiveLibrary& library,
+                                                            const FitnessOptions& options) {
+  if (points.size() != normals.size()) {
+    throw std::invalid_argument("FitnessModel: " + std::to_string(points.size()) + " points but " +
+                                std::to_string(normals.size()) + " normals");
+  }
+  if (points.empty()) throw std::invalid_argument("FitnessModel: no points");
   auto data = std::make_unique<Data>();
   Data& d = *data;
   d.library = library;
   d.options = options;
+  d.diagonal = diagonal;
   d.n = points.size();
   d.p = library.size();
   d.epsilon = options.distanceTolerance * diagonal;
@@ -116,22 +156,7 @@ FitnessModel::FitnessModel(std::span<const Vec3> points, std::span<const Vec3> n
       }
     }
   });
-  if (options.voxelWeight > 0.0) {
-    const std::size_t voxels = target->grid.voxelCount();
-    if (target->inside.size() != voxels) {
-      throw std::invalid_argument("FitnessModel: the voxel labels do not match their grid");
-    }
-    d.words = (voxels + 63) / 64;
-    d.lastWordMask = voxels % 64 == 0 ? ~0ull : (std::uint64_t(1) << (voxels % 64)) - 1;
-    d.labels.assign(target->inside.words().begin(), target->inside.words().end());
-    d.labelCount = target->inside.count();
-    d.insideSets.resize(d.p * d.words);
-    tbb::parallel_for(std::size_t(0), d.p, [&](std::size_t q) {
-      const VoxelSet inside = solidVoxels(library.leafTree(q), target->grid);
-      std::copy(inside.words().begin(), inside.words().end(), d.insideSets.begin() + q * d.words);
-    });
-  }
-  data_ = std::move(data);
+  return data;
 }
 
 FitnessModel::~FitnessModel() = default;
@@ -168,21 +193,26 @@ std::vector<Fitness> FitnessModel::evaluate(std::span<const CsgTree* const> tree
                                            d.radius};
   const std::vector<fitness_detail::TermSums> sums =
       fitness_detail::pointTerms(programs, tables, d.options.operations);
+  std::vector<std::size_t> mismatch;
+  if (d.voxels) {
+    mismatch = fitness_detail::voxelMismatch(programs, d.voxels->insideSets.data(),
+                                             d.voxels->labels.data(), d.voxels->words,
+                                             d.voxels->lastWordMask);
+  }
   std::vector<Fitness> out(trees.size());
-  tbb::parallel_for(std::size_t(0), trees.size(), [&](std::size_t j) {
+  for (std::size_t j = 0; j < trees.size(); ++j) {
     Fitness& f = out[j];
     f.nodes = trees[j]->nodeCount();
     f.distanceTerm = sums[j].distance;
     f.normalTerm = sums[j].normal;
     f.sizePenalty = d.lambda * double(f.nodes);
-    if (d.options.voxelWeight > 0.0) {
-      f.voxelMismatch = fitness_detail::voxelMismatch(programs[j], d.insideSets.data(),
-                                                      d.labels.data(), d.words, d.lastWordMask);
+    if (!mismatch.empty()) {
+      f.voxelMismatch = mismatch[j];
       f.voxelPenalty = d.options.voxelWeight * double(d.n) * double(f.voxelMismatch) /
-                       double(std::max<std::size_t>(d.labelCount, 1));
+                       double(std::max<std::size_t>(d.voxels->labelCount, 1));
     }
     f.total = f.distanceTerm + f.normalTerm - f.sizePenalty - f.voxelPenalty;
-  });
+  }
   return out;
 }
 
@@ -201,10 +231,9 @@ std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::u
   return all;
 }
 
-std::optional<FitnessModel> roughModel(std::span<const Vec3> points, std::span<const Vec3> normals,
-                                       double diagonal, const PrimitiveLibrary& library,
-                                       const FitnessOptions& options, const VoxelTarget* target,
-                                       std::size_t count, std::uint64_t seed) {
+std::optional<FitnessModel> roughModel(const FitnessModel& full, std::span<const Vec3> points,
+                                       std::span<const Vec3> normals, std::size_t count,
+                                       std::uint64_t seed) {
   if (count == 0 || points.size() <= count) return std::nullopt;
   std::vector<Vec3> p, n;
   p.reserve(count);
@@ -213,7 +242,7 @@ std::optional<FitnessModel> roughModel(std::span<const Vec3> points, std::span<c
     p.push_back(points[i]);
     n.push_back(normals[i]);
   }
-  return std::optional<FitnessModel>(std::in_place, p, n, diagonal, library, options, target);
+  return std::optional<FitnessModel>(std::in_place, p, n, full);
 }
 
 }  // namespace csgvox

@@ -69,6 +69,12 @@ class FitnessModel {
   FitnessModel(std::span<const Vec3> points, std::span<const Vec3> normals, double diagonal,
                const PrimitiveLibrary& library, const FitnessOptions& options = {},
                const VoxelTarget* target = nullptr);
+  /// `other`'s library, options and voxel term (shared, not computed again)
+  /// on other points; λ < 0 is ln of their number.
+  /// @throw std::invalid_argument when points and normals differ in size or
+  ///        there are no points.
+  FitnessModel(std::span<const Vec3> points, std::span<const Vec3> normals,
+               const FitnessModel& other);
   ~FitnessModel();
   FitnessModel(FitnessModel&&) noexcept;
   FitnessModel& operator=(FitnessModel&&) noexcept;
@@ -93,6 +99,11 @@ class FitnessModel {
 
  private:
   struct Data;
+  // Every primitive's field and terms at the points.
+  static std::unique_ptr<Data> pointData(std::span<const Vec3> points,
+                                         std::span<const Vec3> normals, double diagonal,
+                                         const PrimitiveLibrary& library,
+                                         const FitnessOptions& options);
   std::unique_ptr<const Data> data_;
 };
 
@@ -100,13 +111,12 @@ class FitnessModel {
 /// them, in order, when count >= n): the points of a rough fitness.
 std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::uint64_t seed);
 
-/// The fitness on `count` of the points picked by spreadSample(seed): the
-/// model a search ranks by while it is rough. None when count is 0 or there
+/// `full` on `count` of its points (`points`, `normals`: the ones it was
+/// built on), picked by spreadSample(seed): the model a search ranks by while
+/// it is rough. It shares `full`'s voxel term. None when count is 0 or there
 /// are no more than `count` points (the full model is then as cheap).
-/// @throw std::invalid_argument as FitnessModel.
-std::optional<FitnessModel> roughModel(std::span<const Vec3> points, std::span<const Vec3> normals,
-                                       double diagonal, const PrimitiveLibrary& library,
-                                       const FitnessOptions& options, const VoxelTarget* target,
-                                       std::size_t count, std::uint64_t seed);
+std::optional<FitnessModel> roughModel(const FitnessModel& full, std::span<const Vec3> points,
+                                       std::span<const Vec3> normals, std::size_t count,
+                                       std::uint64_t seed);
 
 }  // namespace csgvox

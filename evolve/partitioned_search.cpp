@@ -40,9 +40,9 @@ PointModels pointModels(std::span<const Vec3> points, std::span<const Vec3> norm
   p.reserve(subset.size());
   n.reserve(subset.size());
   for (const std::uint32_t i : subset) p.push_back(points[i]), n.push_back(normals[i]);
-  std::optional<FitnessModel> rough =
-      roughModel(p, n, diagonal, library, fitness, target, roughPoints, seed);
-  return {FitnessModel(p, n, diagonal, library, fitness, target), std::move(rough)};
+  FitnessModel full(p, n, diagonal, library, fitness, target);
+  std::optional<FitnessModel> rough = roughModel(full, p, n, roughPoints, seed);
+  return {std::move(full), std::move(rough)};
 }
 
 }  // namespace
@@ -57,8 +57,8 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
   const Clock::time_point start = Clock::now();
   PartitionedResult out;
   const FitnessModel whole(points, normals, diagonal, library, fitness, target);
-  const std::optional<FitnessModel> wholeRough = roughModel(
-      points, normals, diagonal, library, fitness, target, options.roughPoints, evolveOptions.seed);
+  const std::optional<FitnessModel> wholeRough =
+      roughModel(whole, points, normals, options.roughPoints, evolveOptions.seed);
 
   const double tolerance = options.supportTolerance * fitness.distanceTolerance * diagonal;
   const std::vector<SearchPartition> partitions = partitionSearch(

@@ -21,8 +21,7 @@ GpResult runGp(const PointCloud& scan, std::span<const Surface> surfaces, const 
     const FitnessModel model(scan.points, scan.normals, diagonal, out.primitives.library,
                              options.fitness, target);
     const std::optional<FitnessModel> rough =
-        roughModel(scan.points, scan.normals, diagonal, out.primitives.library, options.fitness,
-                   target, options.roughPoints, options.evolve.seed);
+        roughModel(model, scan.points, scan.normals, options.roughPoints, options.evolve.seed);
     out.search = evolve(model, {}, options.evolve, onGeneration, rough ? &*rough : nullptr);
   }
   out.tree = out.search.best;

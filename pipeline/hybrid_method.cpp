@@ -191,23 +191,24 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
   enum { kWrong, kRight, kMissing, kEmpty };
   const std::array<VoxelSet, 4> kinds = {solid - inside, solid & inside, (inside & inBox) - solid,
                                          inBox - solid - inside};
-  std::vector<std::array<VoxelSet, 4>> inLeaf;
-  for (const Node* leaf : subtree.leaves()) {
+  const std::vector<const Node*> leaves = subtree.leaves();
+  std::vector<std::array<VoxelSet, 4>> inLeaf(leaves.size());
+  tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t l) {
     const VoxelSet q =
-        solidVoxels(CsgTree::intersect({CsgTree::leaf(leaf->primitive), boxLeaf}), grid);
-    inLeaf.push_back(
-        {q & kinds[kWrong], q & kinds[kRight], q & kinds[kMissing], q & kinds[kEmpty]});
-  }
+        solidVoxels(CsgTree::intersect({CsgTree::leaf(leaves[l]->primitive), boxLeaf}), grid);
+    inLeaf[l] = {q & kinds[kWrong], q & kinds[kRight], q & kinds[kMissing], q & kinds[kEmpty]};
+  });
   using Index = std::ptrdiff_t;
-  std::vector<Repair> out;
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    if (!meets(candidates[c].tree.bounds(), box)) continue;
+  // Each candidate's repairs in its own slot (in parallel), then in candidate order.
+  std::vector<std::vector<Repair>> byCandidate(candidates.size());
+  tbb::parallel_for(std::size_t(0), candidates.size(), [&](std::size_t c) {
+    if (!meets(candidates[c].tree.bounds(), box)) return;
     const VoxelSet v = solidVoxels(CsgTree::intersect({candidates[c].tree, boxLeaf}), grid);
-    if (v.count() == 0) continue;
+    if (v.count() == 0) return;
     std::array<Index, 4> all;  // v's voxels of each kind
     for (std::size_t k = 0; k < kinds.size(); ++k) all[k] = Index(VoxelSet::countAnd(v, kinds[k]));
     const auto consider = [&](Index gain, Index leaf, bool intersect, bool cut) {
-      if (gain >= kLeastRepair) out.push_back({gain, c, leaf, intersect, cut});
+      if (gain >= kLeastRepair) byCandidate[c].push_back({gain, c, leaf, intersect, cut});
     };
     consider(all[kWrong] - all[kRight], -1, false, true);
     consider(all[kMissing] - all[kEmpty], -1, false, false);
@@ -220,7 +221,9 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
       consider((all[kMissing] - q[kMissing]) - (all[kEmpty] - q[kEmpty]), Index(l), false, false);
       consider(q[kMissing] - q[kEmpty], Index(l), true, false);
     }
-  }
+  });
+  std::vector<Repair> out;
+  for (std::vector<Repair>& r : byCandidate) out.insert(out.end(), r.begin(), r.end());
   std::stable_sort(out.begin(), out.end(),
                    [](const Repair& a, const Repair& b) { return a.gain > b.gain; });
   if (out.size() > count) out.resize(count);
@@ -317,7 +320,7 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
   const FitnessModel model(points, normals, diagonal, library, options.fitness, t);
   const std::optional<FitnessModel> rough =
-      roughModel(points, normals, diagonal, library, options.fitness, t, options.roughPoints, seed);
+      roughModel(model, points, normals, options.roughPoints, seed);
 
   // Seeds: the subtree, and the subtree with one fitting candidate added or
   // taken away.

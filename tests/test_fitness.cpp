@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "core/cpu_features.h"
 #include "evolve/field_kernels.h"
@@ -288,6 +289,47 @@ TEST(Fitness, SpreadSampleIsSortedDistinctAndSeeded) {
   EXPECT_EQ(std::adjacent_find(a.begin(), a.end()), a.end());
   EXPECT_NE(a, spreadSample(1000, 100, 4));
   EXPECT_EQ(spreadSample(10, 50, 1).size(), 10u);
+}
+
+// The rough model is the full one on the sampled points: the same fitness,
+// bit for bit, as a model built on those points from scratch (λ = ln of
+// their number, the voxel term shared with the full model).
+TEST(Fitness, TheRoughModelIsTheFullOneOnTheSample) {
+  const test::OrientedPoints in = noisyCube(31);
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(1, 1, 1), 1.2}});
+  VoxelTarget target;
+  target.grid = VoxelGrid(Vec3::Constant(-1.5), Mat3::Identity(), 0.1, {30, 30, 31});
+  target.inside = VoxelSet(target.grid.voxelCount());
+  for (std::size_t v = 0; v < target.grid.voxelCount(); ++v) {
+    if (target.grid.center(v).cwiseAbs().maxCoeff() < 1.0) target.inside.set(v);
+  }
+  FitnessOptions options;
+  options.voxelWeight = 0.7;
+  options.angleTolerance = 25.0;
+  const FitnessModel full(in.points, in.normals, kDiagonal, library, options, &target);
+  const std::size_t count = in.points.size() / 3;
+  const std::optional<FitnessModel> rough = roughModel(full, in.points, in.normals, count, 9);
+  ASSERT_TRUE(rough.has_value());
+  EXPECT_EQ(rough->pointCount(), count);
+  EXPECT_DOUBLE_EQ(rough->sizeWeight(), std::log(double(count)));
+  std::vector<Vec3> p, n;
+  for (const std::uint32_t i : spreadSample(in.points.size(), count, 9)) {
+    p.push_back(in.points[i]);
+    n.push_back(in.normals[i]);
+  }
+  const FitnessModel scratch(p, n, kDiagonal, library, options, &target);
+  std::vector<CsgTree> trees = randomTrees(library, 37, 20, 5, 0.8);
+  trees.push_back(test::cubeTree(library));
+  for (const CsgTree& t : trees) {
+    const Fitness a = rough->evaluate(t), b = scratch.evaluate(t);
+    EXPECT_EQ(a.distanceTerm, b.distanceTerm);
+    EXPECT_EQ(a.normalTerm, b.normalTerm);
+    EXPECT_EQ(a.voxelMismatch, b.voxelMismatch);
+    EXPECT_EQ(a.total, b.total);
+  }
+  EXPECT_GT(rough->evaluate(trees.front()).voxelMismatch, 0u);
+  EXPECT_FALSE(roughModel(full, in.points, in.normals, 0, 9).has_value());
+  EXPECT_FALSE(roughModel(full, in.points, in.normals, in.points.size(), 9).has_value());
 }
 
 }  // namespace
