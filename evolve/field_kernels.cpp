@@ -81,9 +81,24 @@ struct MinMaxScratch {
 constexpr std::size_t kChunksPerTask = 4;
 constexpr std::size_t kProgramsPerTask = 32;
 
-// Every (fused) program over every chunk. Each chunk's sums are kept apart
-// and added up in chunk order afterwards, as one program run chunk after
-// chunk would: the sums do not depend on how the work was split.
+// body(c, j) for every chunk c < chunks and program j < programs, in
+// parallel, each task chunk by chunk.
+template <class Body>
+void eachChunkOfEachProgram(std::size_t chunks, std::size_t programs, const Body& body) {
+  tbb::parallel_for(
+      tbb::blocked_range2d<std::size_t>(0, chunks, kChunksPerTask, 0, programs, kProgramsPerTask),
+      [&](const tbb::blocked_range2d<std::size_t>& r) {
+        for (std::size_t c = r.rows().begin(); c != r.rows().end(); ++c) {
+          for (std::size_t j = r.cols().begin(); j != r.cols().end(); ++j) body(c, j);
+        }
+      });
+}
+
+}  // namespace
+
+// Each chunk's sums are kept apart and added up in chunk order afterwards,
+// as one program run chunk after chunk would: the sums do not depend on how
+// the work was split.
 std::vector<TermSums> minMaxTerms(std::span<const Program> programs, const PointTables& t) {
   const std::size_t count = programs.size();
   const std::size_t chunks = (t.n + kChunk - 1) / kChunk;
@@ -91,30 +106,24 @@ std::vector<TermSums> minMaxTerms(std::span<const Program> programs, const Point
   for (const Program& p : programs) depth = std::max(depth, p.stackDepth);
   std::vector<double> partial(2 * count * chunks, 0.0);  // [program][chunk][2]
   const MinMaxChunkKernel kernel = minMaxKernel(simdLevel());
-  tbb::parallel_for(
-      tbb::blocked_range2d<std::size_t>(0, chunks, kChunksPerTask, 0, count, kProgramsPerTask),
-      [&](const tbb::blocked_range2d<std::size_t>& r) {
-        thread_local MinMaxScratch scratch;
-        if (scratch.values.size() < depth * kChunk) {
-          scratch.values.resize(depth * kChunk);
-          scratch.ids.resize(depth * kChunk);
-        }
-        MinMaxChunk k;
-        k.values = t.values;
-        k.distanceTerm = t.distanceTerm;
-        k.normalTerm = t.normalTerm;
-        k.n = t.n;
-        k.stackValues = scratch.values.data();
-        k.stackIds = scratch.ids.data();
-        for (std::size_t c = r.rows().begin(); c != r.rows().end(); ++c) {
-          const std::size_t start = c * kChunk, m = std::min(kChunk, t.n - start);
-          for (std::size_t j = r.cols().begin(); j != r.cols().end(); ++j) {
-            k.code = programs[j].code.data();
-            k.codeSize = programs[j].code.size();
-            kernel(k, start, m, partial.data() + 2 * (j * chunks + c));
-          }
-        }
-      });
+  eachChunkOfEachProgram(chunks, count, [&](std::size_t c, std::size_t j) {
+    thread_local MinMaxScratch scratch;
+    if (scratch.values.size() < depth * kChunk) {
+      scratch.values.resize(depth * kChunk);
+      scratch.ids.resize(depth * kChunk);
+    }
+    MinMaxChunk k;
+    k.code = programs[j].code.data();
+    k.codeSize = programs[j].code.size();
+    k.values = t.values;
+    k.distanceTerm = t.distanceTerm;
+    k.normalTerm = t.normalTerm;
+    k.n = t.n;
+    k.stackValues = scratch.values.data();
+    k.stackIds = scratch.ids.data();
+    const std::size_t start = c * kChunk;
+    kernel(k, start, std::min(kChunk, t.n - start), partial.data() + 2 * (j * chunks + c));
+  });
   std::vector<TermSums> out(count);
   for (std::size_t j = 0; j < count; ++j) {
     const double* s = partial.data() + 2 * j * chunks;
@@ -125,6 +134,8 @@ std::vector<TermSums> minMaxTerms(std::span<const Program> programs, const Point
   }
   return out;
 }
+
+namespace {
 
 // ---- smooth operations: values and gradients blend near the bisector ----
 
@@ -184,7 +195,7 @@ void combineSmooth(SmoothStack& s, std::size_t a, std::size_t b, std::size_t m, 
 }
 
 template <class Ops>
-TermSums smoothTerms(const Program& program, const PointTables& t, const Ops& ops) {
+TermSums smoothProgramTerms(const Program& program, const PointTables& t, const Ops& ops) {
   thread_local SmoothStack s;
   const std::size_t need = program.stackDepth * kChunk;
   if (s.f.size() < need) {
@@ -295,22 +306,16 @@ Program fused(const Program& program) {
   return out;
 }
 
-std::vector<TermSums> pointTerms(std::span<const Program> programs, const PointTables& tables,
-                                 SetOperationKind ops) {
-  if (ops == SetOperationKind::MinMax) {
-    std::vector<Program> code;
-    code.reserve(programs.size());
-    for (const Program& p : programs) code.push_back(fused(p));
-    return minMaxTerms(code, tables);
-  }
+std::vector<TermSums> smoothTerms(std::span<const Program> programs, const PointTables& tables,
+                                  SetOperationKind ops) {
   if (ops != SetOperationKind::RFunction && ops != SetOperationKind::Sardf) {
-    throw std::invalid_argument("unknown set operations");
+    throw std::invalid_argument("smooth terms: not a smooth set operation");
   }
   std::vector<TermSums> out(programs.size());
   tbb::parallel_for(std::size_t(0), programs.size(), [&](std::size_t j) {
     out[j] = ops == SetOperationKind::RFunction
-                 ? smoothTerms(programs[j], tables, RFunctionPartials{})
-                 : smoothTerms(programs[j], tables, SardfPartials{tables.radius});
+                 ? smoothProgramTerms(programs[j], tables, RFunctionPartials{})
+                 : smoothProgramTerms(programs[j], tables, SardfPartials{tables.radius});
   });
   return out;
 }
@@ -377,46 +382,30 @@ void solidChunk(const Program& program, const std::uint64_t* insideSets, std::si
 
 std::vector<std::size_t> voxelMismatch(std::span<const Program> programs,
                                        const std::uint64_t* insideSets, const std::uint64_t* labels,
-                                       std::size_t words, std::uint64_t lastWordMask) {
+                                       std::size_t labelCount, std::size_t words,
+                                       std::uint64_t lastWordMask) {
   const std::size_t count = programs.size();
   const std::size_t chunks = (words + kWordChunk - 1) / kWordChunk;
-  std::vector<Program> code;
-  code.reserve(count);
   std::size_t depth = 1;
-  for (const Program& p : programs) {
-    code.push_back(fused(p));
-    depth = std::max(depth, p.stackDepth);
-  }
+  for (const Program& p : programs) depth = std::max(depth, p.stackDepth);
   const BitsetKernels& bits = activeBitsetKernels();
-  // |T △ L| = |T| + |L| − 2 |T ∩ L| per chunk, with the hardware's popcount;
-  // the bits past the last voxel are masked off both.
-  const auto lastWord = [&](const std::uint64_t* w) { return w[words - 1] & lastWordMask; };
-  std::vector<std::size_t> labelCount(chunks);
-  for (std::size_t c = 0; c < chunks; ++c) {
+  // |T △ L| = |L| + Σ over chunks of |T| − 2 |T ∩ L|, with the hardware's
+  // popcount; T's bits past the last voxel are masked off (L has none).
+  std::vector<std::ptrdiff_t> partial(count * chunks);  // [program][chunk]
+  eachChunkOfEachProgram(chunks, count, [&](std::size_t c, std::size_t j) {
+    thread_local std::vector<std::uint64_t> stack;
+    if (stack.size() < depth * kWordChunk) stack.resize(depth * kWordChunk);
     const std::size_t start = c * kWordChunk, m = std::min(kWordChunk, words - start);
-    labelCount[c] = c + 1 < chunks ? bits.count(labels + start, m)
-                                   : bits.count(labels + start, m - 1) +
-                                         std::size_t(std::popcount(lastWord(labels)));
-  }
-  std::vector<std::size_t> partial(count * chunks);  // [program][chunk]
-  tbb::parallel_for(
-      tbb::blocked_range2d<std::size_t>(0, chunks, kChunksPerTask, 0, count, kProgramsPerTask),
-      [&](const tbb::blocked_range2d<std::size_t>& r) {
-        thread_local std::vector<std::uint64_t> stack;
-        if (stack.size() < depth * kWordChunk) stack.resize(depth * kWordChunk);
-        for (std::size_t c = r.rows().begin(); c != r.rows().end(); ++c) {
-          const std::size_t start = c * kWordChunk, m = std::min(kWordChunk, words - start);
-          for (std::size_t j = r.cols().begin(); j != r.cols().end(); ++j) {
-            solidChunk(code[j], insideSets, words, start, m, stack.data());
-            if (start + m == words) stack[m - 1] &= lastWordMask;
-            partial[j * chunks + c] = bits.count(stack.data(), m) + labelCount[c] -
-                                      2 * bits.countAnd(stack.data(), labels + start, m);
-          }
-        }
-      });
-  std::vector<std::size_t> out(count, 0);
+    solidChunk(programs[j], insideSets, words, start, m, stack.data());
+    if (start + m == words) stack[m - 1] &= lastWordMask;
+    partial[j * chunks + c] = std::ptrdiff_t(bits.count(stack.data(), m)) -
+                              2 * std::ptrdiff_t(bits.countAnd(stack.data(), labels + start, m));
+  });
+  std::vector<std::size_t> out(count);
   for (std::size_t j = 0; j < count; ++j) {
-    for (std::size_t c = 0; c < chunks; ++c) out[j] += partial[j * chunks + c];
+    std::ptrdiff_t sum = std::ptrdiff_t(labelCount);
+    for (std::size_t c = 0; c < chunks; ++c) sum += partial[j * chunks + c];
+    out[j] = std::size_t(sum);
   }
   return out;
 }

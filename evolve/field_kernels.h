@@ -28,6 +28,10 @@ struct Program {
 /// @throw std::invalid_argument for an empty tree or a leaf not in the library.
 Program compile(const CsgTree& tree, const PrimitiveLibrary& library);
 
+/// `program` with each leaf that a Min or Max takes at once fused into it
+/// (MinLeaf, MaxLeaf and their Neg forms): what min/max and the voxel term run.
+Program fused(const Program& program);
+
 /// The cached arrays a program runs over ([primitive][point] layouts).
 struct PointTables {
   std::size_t n = 0;
@@ -51,19 +55,25 @@ struct TermSums {
 /// that the CPU and the build have.
 MinMaxChunkKernel minMaxKernel(SimdLevel level);
 
-/// The point terms of each program with the given set operations. With
-/// min/max, every chunk of points is read once for all the programs (the
-/// cached arrays of a large library do not fit in the cache; one chunk's do);
-/// each program's sums are the same, bit for bit, as when run alone and
-/// whatever the number of threads.
-std::vector<TermSums> pointTerms(std::span<const Program> programs, const PointTables& tables,
-                                 SetOperationKind ops);
+/// The point terms of each fused program (fused()) with min/max: every
+/// chunk of points is read once for all the programs (the cached arrays of a
+/// large library do not fit in the cache; one chunk's do); each program's
+/// sums are the same, bit for bit, as when run alone and whatever the number
+/// of threads.
+std::vector<TermSums> minMaxTerms(std::span<const Program> programs, const PointTables& tables);
 
-/// |T △ L| of each program: voxels where the program's solid (from the
-/// primitives' inside sets, [p][words]) and the labels disagree. Like the
-/// point terms, each chunk of words is read once for all the programs.
+/// The point terms of each (unfused) program with R-functions or SARDF.
+/// @throw std::invalid_argument for min/max.
+std::vector<TermSums> smoothTerms(std::span<const Program> programs, const PointTables& tables,
+                                  SetOperationKind ops);
+
+/// |T △ L| of each fused program: voxels where the program's solid (from the
+/// primitives' inside sets, [p][words]) and the labels (`labelCount` of them
+/// set, none past the last voxel) disagree. Like the point terms, each chunk
+/// of words is read once for all the programs.
 std::vector<std::size_t> voxelMismatch(std::span<const Program> programs,
                                        const std::uint64_t* insideSets, const std::uint64_t* labels,
-                                       std::size_t words, std::uint64_t lastWordMask);
+                                       std::size_t labelCount, std::size_t words,
+                                       std::uint64_t lastWordMask);
 
 }  // namespace csgvox::fitness_detail

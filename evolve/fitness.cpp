@@ -191,13 +191,22 @@ std::vector<Fitness> FitnessModel::evaluate(std::span<const CsgTree* const> tree
                                            d.epsilon,
                                            d.alpha,
                                            d.radius};
+  // Min/max and the voxel term run the fused programs, the smooth
+  // operations the plain ones.
+  const bool minMax = d.options.operations == SetOperationKind::MinMax;
+  std::vector<Program> fused;
+  if (minMax || d.voxels) {
+    fused.reserve(programs.size());
+    for (const Program& p : programs) fused.push_back(fitness_detail::fused(p));
+  }
   const std::vector<fitness_detail::TermSums> sums =
-      fitness_detail::pointTerms(programs, tables, d.options.operations);
+      minMax ? fitness_detail::minMaxTerms(fused, tables)
+             : fitness_detail::smoothTerms(programs, tables, d.options.operations);
   std::vector<std::size_t> mismatch;
   if (d.voxels) {
-    mismatch = fitness_detail::voxelMismatch(programs, d.voxels->insideSets.data(),
-                                             d.voxels->labels.data(), d.voxels->words,
-                                             d.voxels->lastWordMask);
+    const Data::Voxels& v = *d.voxels;
+    mismatch = fitness_detail::voxelMismatch(fused, v.insideSets.data(), v.labels.data(),
+                                             v.labelCount, v.words, v.lastWordMask);
   }
   std::vector<Fitness> out(trees.size());
   for (std::size_t j = 0; j < trees.size(); ++j) {

@@ -86,8 +86,8 @@ class FitnessModel {
 
   /// E(t) of each tree, as evaluate(tree) gives it (bit for bit), computed
   /// together: with min/max operations each chunk of the points' cached
-  /// arrays is read once for all the trees, which is several times faster
-  /// than one tree after another once the arrays outgrow the cache.
+  /// arrays is read once for all the trees (about twice as fast as one tree
+  /// after another once the arrays outgrow the cache; bench_evolve).
   /// @throw std::invalid_argument as evaluate(tree).
   std::vector<Fitness> evaluate(std::span<const CsgTree* const> trees) const;
 
