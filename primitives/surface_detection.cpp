@@ -573,8 +573,9 @@ void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surfac
   // for new surfaces, and stray noise is no help there.
   settle.connectedPatches = false;
   // The passes keep the surfaces as RANSAC found them; the final refinement
-  // turns the flattened ones into planes.
+  // turns the flattened ones into planes and splits stepped cylinders.
   settle.flattenToPlanes = false;
+  settle.splitSteps = false;
   refineSurfaces(cloud, result, settle);
   found = std::move(result.surfaces);
   result.surfaces.clear();

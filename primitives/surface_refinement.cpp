@@ -13,6 +13,8 @@
 #include <iterator>
 #include <limits>
 #include <numbers>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "primitives/surface_fit_internal.h"
@@ -68,6 +70,109 @@ void fitAll(const PointCloud& cloud, DetectionResult& result, const RefineOption
         }
       },
       tbb::simple_partitioner());
+}
+
+// True for a cylinder, or a cone within kStepConeAngle of one.
+constexpr double kStepConeAngle = 5.0 * std::numbers::pi / 180.0;
+bool nearCylinder(const Surface& s) {
+  if (s.type() == SurfaceType::Cylinder) return true;
+  const auto* c = s.as<ConeSurface>();
+  return c && c->halfAngle < kStepConeAngle;
+}
+
+// The two cylinders a surface's inliers form when they lie at two distinct
+// distances from its axis, or nothing. RANSAC takes a hole and its
+// counterbore, or a shaft and its shoulder, as one surface when their radii
+// differ by less than epsilon; a fit then finds a cylinder or a slight cone
+// between the two. The inliers' distances from the axis (found from their
+// normals, which the radii do not sway) split at the widest empty band
+// between consecutive ones that leaves at least `minPoints` points on either
+// side. The split holds when the band is wider than the position noise and
+// than kStepGap pooled standard deviations of the two sides (a continuous
+// spread of distances, from noise or a cone, leaves bands of about the
+// spread over the number of points; a tessellated scan's facets spread each
+// side by a few per cent of its radius), and the two sides fit cylinders
+// with at most half the whole's RMS distance.
+constexpr double kStepGap = 1.5;
+std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cloud,
+                                                            const Surface& surf,
+                                                            std::size_t minPoints,
+                                                            const FitScales& scales,
+                                                            const RefineOptions& options) {
+  const std::size_t n = surf.inliers.size();
+  if (!nearCylinder(surf) || n < 2 * minPoints || !(surf.rms > 0.0)) return std::nullopt;
+  Surface normalsAxis;
+  if (!initialSurface(cloud, surf.inliers, SurfaceType::Cylinder, normalsAxis)) return std::nullopt;
+  const Vec3 a = normalsAxis.as<CylinderSurface>()->axisPoint;
+  const Vec3 d = normalsAxis.as<CylinderSurface>()->axisDir;
+  std::vector<std::pair<double, std::uint32_t>> rho(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3 v = cloud.points[surf.inliers[k]] - a;
+    rho[k] = {(v - v.dot(d) * d).norm(), surf.inliers[k]};
+  }
+  std::sort(rho.begin(), rho.end());
+  // The widest empty band between consecutive distances that leaves at least
+  // minPoints points on either side.
+  std::size_t best = 0;
+  double empty = 0.0;
+  for (std::size_t k = minPoints; k + minPoints <= n; ++k) {
+    if (const double g = rho[k].first - rho[k - 1].first; g > empty) empty = g, best = k;
+  }
+  if (best == 0 || !(empty > scales.position)) return std::nullopt;
+  double sse = 0.0;
+  for (const auto& [lo, hi] : {std::pair{std::size_t(0), best}, std::pair{best, n}}) {
+    double mean = 0.0;
+    for (std::size_t k = lo; k < hi; ++k) mean += rho[k].first;
+    mean /= double(hi - lo);
+    for (std::size_t k = lo; k < hi; ++k) sse += (rho[k].first - mean) * (rho[k].first - mean);
+  }
+  if (!(empty > kStepGap * std::sqrt(sse / double(n)))) return std::nullopt;
+  std::pair<Surface, Surface> parts;
+  double partsSquared = 0.0;
+  for (int side = 0; side < 2; ++side) {
+    Surface& part = side == 0 ? parts.first : parts.second;
+    std::vector<std::uint32_t> indices;
+    for (std::size_t k = side == 0 ? 0 : best; k < (side == 0 ? best : n); ++k)
+      indices.push_back(rho[k].second);
+    std::sort(indices.begin(), indices.end());
+    if (!initialSurface(cloud, indices, SurfaceType::Cylinder, part)) return std::nullopt;
+    const double rms = fitSurface(cloud, indices, part, scales, options);
+    if (!(rms >= 0.0)) return std::nullopt;
+    partsSquared += rms * rms * double(indices.size());
+    part.inliers = std::move(indices);
+    part.rms = rms;
+  }
+  if (!(std::sqrt(partsSquared / double(n)) <= 0.5 * surf.rms)) return std::nullopt;
+  return parts;
+}
+
+// Replaces every surface whose inliers form two stepped cylinders
+// (steppedCylinders) by the two, the inner one first; a part is split again
+// if it is itself stepped. The assignment follows.
+void splitSteps(const PointCloud& cloud, DetectionResult& result, const RefineOptions& options) {
+  const FitScales scales = fitScales(result, options);
+  const std::size_t minPoints = std::max<std::size_t>(1, result.minPoints);
+  std::vector<Surface> pending(std::make_move_iterator(result.surfaces.rbegin()),
+                               std::make_move_iterator(result.surfaces.rend()));
+  result.surfaces.clear();
+  bool split = false;
+  while (!pending.empty()) {
+    Surface surf = std::move(pending.back());
+    pending.pop_back();
+    surf.rms = rmsDistance(cloud, surf.inliers, surf);
+    if (auto parts = steppedCylinders(cloud, surf, minPoints, scales, options)) {
+      pending.push_back(std::move(parts->second));
+      pending.push_back(std::move(parts->first));
+      split = true;
+    } else {
+      result.surfaces.push_back(std::move(surf));
+    }
+  }
+  if (!split) return;
+  std::fill(result.assignment.begin(), result.assignment.end(), -1);
+  for (std::size_t s = 0; s < result.surfaces.size(); ++s) {
+    for (std::uint32_t i : result.surfaces[s].inliers) result.assignment[i] = int(s);
+  }
 }
 
 // Removes surfaces whose inliers other surfaces explain: a duplicate, a
@@ -201,6 +306,7 @@ void refineSurfaces(const PointCloud& cloud, DetectionResult& result,
   }
   fitAll(cloud, result, options);
   if (options.removeRedundant) removeRedundant(cloud, result, options);
+  if (options.splitSteps) splitSteps(cloud, result, options);
   if (options.reassign) {
     reassignPoints(cloud, result, std::max<std::size_t>(1, result.minPoints),
                    options.connectedPatches);

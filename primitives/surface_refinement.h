@@ -31,6 +31,9 @@ struct RefineOptions {
   bool flattenToPlanes = true;     ///< a cylinder or sphere whose fitted radius exceeds the
                                    ///< diagonal D, or a cone within 2 degrees of flat, becomes
                                    ///< the plane of its inliers
+  bool splitSteps = true;  ///< a cylinder (or a cone within 5 degrees of one) whose inliers lie at
+                           ///< two distinct distances from its axis becomes two cylinders (a hole
+                           ///< and its counterbore taken as one surface)
 };
 
 /// Residual scales of one fit: each point contributes its orthogonal distance

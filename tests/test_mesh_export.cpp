@@ -152,8 +152,12 @@ class TempDir {
  public:
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    // A parameterised test's name ("Name/0") would make a nested directory,
+    // whose parent the destructor would leave behind.
+    std::string name = info->name();
+    std::replace(name.begin(), name.end(), '/', '_');
     path_ = fs::temp_directory_path() /
-            ("csgvox_test_mesh_export_" + std::to_string(::getpid()) + "_" + info->name());
+            ("csgvox_test_mesh_export_" + std::to_string(::getpid()) + "_" + name);
     fs::remove_all(path_);
     fs::create_directories(path_);
   }

@@ -4,12 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <numbers>
 #include <ostream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -538,6 +540,118 @@ TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   ASSERT_EQ(round.surfaces[0].type(), SurfaceType::Cylinder) << describe(round.surfaces[0]);
   EXPECT_NEAR(round.surfaces[0].as<CylinderSurface>()->radius, 4.0, 1e-6);
   EXPECT_EQ(round.surfaces[0].inliers.size(), cloud.size());
+}
+
+// Points on a tessellated hole along `axis` (frame column 2): a prism of
+// `facets` flat sides circumscribed about radius r (so the points lie between
+// r cos(pi / facets) and r from the axis) from height h0 to h1, with inward
+// (concave) normals of the smooth hole.
+void addHole(PointCloud& cloud, Rng& rng, const Mat3& frame, const Vec3& origin, double r,
+             double h0, double h1, int facets, int count) {
+  const double sector = 2.0 * std::numbers::pi / facets;
+  for (int i = 0; i < count; ++i) {
+    const double t = uniform(rng, 0.0, 2.0 * std::numbers::pi), h = uniform(rng, h0, h1);
+    const double mid = (std::floor(t / sector) + 0.5) * sector;
+    const double rho = r * std::cos(0.5 * sector) / std::cos(t - mid);
+    const Vec3 radial = std::cos(t) * frame.col(0) + std::sin(t) * frame.col(1);
+    cloud.points.push_back(origin + rho * radial + h * frame.col(2));
+    cloud.normals.push_back(-radial);
+  }
+}
+
+DetectionResult oneSurface(const PointCloud& cloud, Surface s, double diag, double eps) {
+  DetectionResult result;
+  result.diagonal = diag;
+  result.epsilon = eps;
+  result.clusterEpsilon = 0.2;
+  result.minPoints = 50;
+  result.status = DetectionResult::Status::Ok;
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) s.inliers.push_back(i);
+  result.surfaces.push_back(std::move(s));
+  result.assignment.assign(cloud.size(), 0);
+  return result;
+}
+
+// A through hole of radius 0.38 and its counterbore of radius 0.444 (082 of
+// the InverseCSG parts, tessellated with 12 facets) differ by less than
+// epsilon, so RANSAC takes them as one surface. The refinement splits it into
+// the two cylinders; a single tessellated hole, a noisy one and a cone of 4
+// degrees (a continuous spread of distances from the axis) stay one surface.
+TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinders) {
+  Rng rng(5);
+  const Mat3 frame = randomRotation(rng);
+  const Vec3 origin(2.0, -3.4, 0.5);
+  const double diag = 14.0, eps = 0.07;
+  PointCloud cloud;
+  addHole(cloud, rng, frame, origin, 0.38, -0.7, 0.95, 12, 900);
+  addHole(cloud, rng, frame, origin, 0.444, 0.95, 1.95, 12, 600);
+  Surface merged;
+  merged.shape = CylinderSurface{origin, frame.col(2), 0.41};
+  DetectionResult result = oneSurface(cloud, merged, diag, eps);
+  refineSurfaces(cloud, result);
+  ASSERT_EQ(result.surfaces.size(), 2u) << describe(result.surfaces[0]);
+  std::vector<double> radii;
+  for (const Surface& s : result.surfaces) {
+    ASSERT_EQ(s.type(), SurfaceType::Cylinder) << describe(s);
+    const auto& c = *s.as<CylinderSurface>();
+    EXPECT_LT(axisAngle(c.axisDir, frame.col(2)), 0.5 * kDeg) << describe(s);
+    EXPECT_LT(lineDistance(origin, c.axisPoint, c.axisDir), 0.01) << describe(s);
+    radii.push_back(c.radius);
+  }
+  std::sort(radii.begin(), radii.end());
+  // A 12-gon's points lie between 0.966 r and r from the axis.
+  EXPECT_NEAR(radii[0], 0.38 * 0.983, 0.01);
+  EXPECT_NEAR(radii[1], 0.444 * 0.983, 0.01);
+  EXPECT_EQ(result.surfaces[0].inliers.size() + result.surfaces[1].inliers.size(), cloud.size());
+  // RANSAC can give a slight cone through the two instead: the same split.
+  Surface cone;
+  cone.shape = ConeSurface{origin - 20.0 * frame.col(2), frame.col(2), 1.2 * kDeg};
+  DetectionResult fromCone = oneSurface(cloud, cone, diag, eps);
+  refineSurfaces(cloud, fromCone);
+  ASSERT_EQ(fromCone.surfaces.size(), 2u) << describe(fromCone.surfaces[0]);
+  for (const Surface& s : fromCone.surfaces) EXPECT_EQ(s.type(), SurfaceType::Cylinder);
+
+  // One tessellated hole, the two with noise of sigma 0.02 (a third of the
+  // step, so the distances are bimodal but leave no empty band), and a cone
+  // of 4 degrees: one surface each.
+  PointCloud single;
+  addHole(single, rng, frame, origin, 0.444, -0.7, 1.95, 12, 1500);
+  PointCloud noisy = cloud;
+  std::normal_distribution<double> noise(0.0, 0.02);
+  for (Vec3& p : noisy.points) p += Vec3(noise(rng), noise(rng), noise(rng));
+  PointCloud conical;
+  for (int i = 0; i < 1500; ++i) {
+    const double t = uniform(rng, 0.0, 2.0 * std::numbers::pi), h = uniform(rng, 6.0, 8.7);
+    const Vec3 radial = std::cos(t) * frame.col(0) + std::sin(t) * frame.col(1);
+    const double a = 4.0 * kDeg;
+    conical.points.push_back(origin + h * std::tan(a) * radial + h * frame.col(2));
+    conical.normals.push_back(-(std::cos(a) * radial - std::sin(a) * frame.col(2)));
+  }
+  // A rod of radius 0.4 with a slight cone at its end (its points spread
+  // continuously from 0.34 to 0.4 from the axis): one surface too.
+  PointCloud rod;
+  addHole(rod, rng, frame, origin, 0.4, 0.0, 2.0, 400, 1000);
+  for (int i = 0; i < 400; ++i) {
+    const double t = uniform(rng, 0.0, 2.0 * std::numbers::pi), h = uniform(rng, 0.0, 0.6);
+    const Vec3 radial = std::cos(t) * frame.col(0) + std::sin(t) * frame.col(1);
+    const double a = std::atan(0.1);
+    rod.points.push_back(origin + (0.4 - 0.1 * h) * radial + (2.0 + h) * frame.col(2));
+    rod.normals.push_back(-(std::cos(a) * radial + std::sin(a) * frame.col(2)));
+  }
+  // Two coaxial hexagonal prisms (radii 0.40 and 0.47): an empty band of
+  // 0.007 between their distances from the axis, but each side spreads over
+  // 0.06, so the band is no evidence of two surfaces.
+  PointCloud hexagons;
+  addHole(hexagons, rng, frame, origin, 0.40, -0.7, 0.95, 6, 900);
+  addHole(hexagons, rng, frame, origin, 0.48, 0.95, 1.95, 6, 900);
+  // An exact cylinder: distances equal to rounding, bands of rounding.
+  PointCloud exact;
+  addHole(exact, rng, frame, origin, 0.444, -0.7, 1.95, 1 << 30, 1500);
+  for (const PointCloud* c : {&single, &noisy, &conical, &rod, &hexagons, &exact}) {
+    DetectionResult one = oneSurface(*c, merged, diag, eps);
+    refineSurfaces(*c, one);
+    EXPECT_EQ(one.surfaces.size(), 1u) << describe(one.surfaces[0]);
+  }
 }
 
 // ---------------------------------------------------------------------------
