@@ -8,6 +8,7 @@
 #include <tbb/partitioner.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <iterator>
@@ -91,12 +92,13 @@ bool nearCylinder(const Surface& s) {
 // than kStepGap pooled standard deviations of the two sides (a continuous
 // spread of distances, from noise or a cone, leaves bands of about the
 // spread over the number of points; a tessellated scan's facets spread each
-// side by a few per cent of its radius), and the two sides fit cylinders
-// with at most half the whole's RMS distance.
+// side by a few per cent of its radius), the two sides follow each other
+// along the axis (their axial spans share at most `overlap`), and the two
+// sides fit cylinders with at most half the whole's RMS distance.
 constexpr double kStepGap = 1.5;
 std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cloud,
                                                             const Surface& surf,
-                                                            std::size_t minPoints,
+                                                            std::size_t minPoints, double overlap,
                                                             const FitScales& scales,
                                                             const RefineOptions& options) {
   const std::size_t n = surf.inliers.size();
@@ -127,6 +129,22 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
     for (std::size_t k = lo; k < hi; ++k) sse += (rho[k].first - mean) * (rho[k].first - mean);
   }
   if (!(empty > kStepGap * std::sqrt(sse / double(n)))) return std::nullopt;
+  // A step: the two radii follow each other along the axis. Sides that
+  // share their axial span by more than `overlap` are a patch of some other
+  // shape (a tessellated arc whose facets lie at two distances from the
+  // axis over the same height), not a hole and its counterbore.
+  std::array<std::pair<double, double>, 2> span;
+  for (int side = 0; side < 2; ++side) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t k = side == 0 ? 0 : best; k < (side == 0 ? best : n); ++k) {
+      const double t = (cloud.points[rho[k].second] - a).dot(d);
+      lo = std::min(lo, t), hi = std::max(hi, t);
+    }
+    span[std::size_t(side)] = {lo, hi};
+  }
+  if (std::min(span[0].second, span[1].second) - std::max(span[0].first, span[1].first) > overlap) {
+    return std::nullopt;
+  }
   std::pair<Surface, Surface> parts;
   double partsSquared = 0.0;
   for (int side = 0; side < 2; ++side) {
@@ -160,7 +178,7 @@ void splitSteps(const PointCloud& cloud, DetectionResult& result, const RefineOp
     Surface surf = std::move(pending.back());
     pending.pop_back();
     surf.rms = rmsDistance(cloud, surf.inliers, surf);
-    if (auto parts = steppedCylinders(cloud, surf, minPoints, scales, options)) {
+    if (auto parts = steppedCylinders(cloud, surf, minPoints, result.epsilon, scales, options)) {
       pending.push_back(std::move(parts->second));
       pending.push_back(std::move(parts->first));
       split = true;
