@@ -102,9 +102,11 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
                                                             const FitScales& scales,
                                                             const RefineOptions& options) {
   const std::size_t n = surf.inliers.size();
-  if (!nearCylinder(surf) || n < 2 * minPoints || !(surf.rms > 0.0)) return std::nullopt;
+  if (!nearCylinder(surf) || n < 2 * minPoints) return std::nullopt;
+  const double rms = rmsDistance(cloud, surf.inliers, surf);
   Surface normalsAxis;
-  if (!initialSurface(cloud, surf.inliers, SurfaceType::Cylinder, normalsAxis)) return std::nullopt;
+  if (!(rms > 0.0) || !initialSurface(cloud, surf.inliers, SurfaceType::Cylinder, normalsAxis))
+    return std::nullopt;
   const Vec3 a = normalsAxis.as<CylinderSurface>()->axisPoint;
   const Vec3 d = normalsAxis.as<CylinderSurface>()->axisDir;
   std::vector<std::pair<double, std::uint32_t>> rho(n);
@@ -121,75 +123,69 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
     if (const double g = rho[k].first - rho[k - 1].first; g > empty) empty = g, best = k;
   }
   if (best == 0 || !(empty > scales.position)) return std::nullopt;
+  // Each side's spread of distances (pooled) and span along the axis. A
+  // step's two radii follow each other along the axis; sides that share
+  // their axial span by more than `overlap` are a patch of some other shape
+  // (a tessellated arc whose facets lie at two distances from the axis over
+  // the same height), not a hole and its counterbore.
+  const std::array<std::pair<std::size_t, std::size_t>, 2> sides{{{0, best}, {best, n}}};
+  std::array<std::pair<double, double>, 2> span;
   double sse = 0.0;
-  for (const auto& [lo, hi] : {std::pair{std::size_t(0), best}, std::pair{best, n}}) {
+  for (std::size_t side = 0; side < 2; ++side) {
+    const auto [lo, hi] = sides[side];
     double mean = 0.0;
-    for (std::size_t k = lo; k < hi; ++k) mean += rho[k].first;
+    span[side] = {std::numeric_limits<double>::infinity(),
+                  -std::numeric_limits<double>::infinity()};
+    for (std::size_t k = lo; k < hi; ++k) {
+      mean += rho[k].first;
+      const double t = (cloud.points[rho[k].second] - a).dot(d);
+      span[side] = {std::min(span[side].first, t), std::max(span[side].second, t)};
+    }
     mean /= double(hi - lo);
     for (std::size_t k = lo; k < hi; ++k) sse += (rho[k].first - mean) * (rho[k].first - mean);
   }
   if (!(empty > kStepGap * std::sqrt(sse / double(n)))) return std::nullopt;
-  // A step: the two radii follow each other along the axis. Sides that
-  // share their axial span by more than `overlap` are a patch of some other
-  // shape (a tessellated arc whose facets lie at two distances from the
-  // axis over the same height), not a hole and its counterbore.
-  std::array<std::pair<double, double>, 2> span;
-  for (int side = 0; side < 2; ++side) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (std::size_t k = side == 0 ? 0 : best; k < (side == 0 ? best : n); ++k) {
-      const double t = (cloud.points[rho[k].second] - a).dot(d);
-      lo = std::min(lo, t), hi = std::max(hi, t);
-    }
-    span[std::size_t(side)] = {lo, hi};
-  }
-  if (std::min(span[0].second, span[1].second) - std::max(span[0].first, span[1].first) > overlap) {
+  if (std::min(span[0].second, span[1].second) - std::max(span[0].first, span[1].first) > overlap)
     return std::nullopt;
-  }
-  std::pair<Surface, Surface> parts;
+  std::array<Surface, 2> parts;
   double partsSquared = 0.0;
-  for (int side = 0; side < 2; ++side) {
-    Surface& part = side == 0 ? parts.first : parts.second;
+  for (std::size_t side = 0; side < 2; ++side) {
+    const auto [lo, hi] = sides[side];
     std::vector<std::uint32_t> indices;
-    for (std::size_t k = side == 0 ? 0 : best; k < (side == 0 ? best : n); ++k)
-      indices.push_back(rho[k].second);
+    indices.reserve(hi - lo);
+    for (std::size_t k = lo; k < hi; ++k) indices.push_back(rho[k].second);
     std::sort(indices.begin(), indices.end());
+    Surface& part = parts[side];
     if (!initialSurface(cloud, indices, SurfaceType::Cylinder, part)) return std::nullopt;
-    const double rms = fitSurface(cloud, indices, part, scales, options);
-    if (!(rms >= 0.0)) return std::nullopt;
-    partsSquared += rms * rms * double(indices.size());
+    const double partRms = fitSurface(cloud, indices, part, scales, options);
+    if (!(partRms >= 0.0)) return std::nullopt;
+    partsSquared += partRms * partRms * double(indices.size());
     part.inliers = std::move(indices);
-    part.rms = rms;
+    part.rms = partRms;
   }
-  if (!(std::sqrt(partsSquared / double(n)) <= 0.5 * surf.rms)) return std::nullopt;
-  return parts;
+  if (!(std::sqrt(partsSquared / double(n)) <= 0.5 * rms)) return std::nullopt;
+  return std::pair{std::move(parts[0]), std::move(parts[1])};
 }
 
 // Replaces every surface whose inliers form two stepped cylinders
 // (steppedCylinders) by the two, the inner one first; a part is split again
-// if it is itself stepped. The assignment follows.
+// if it is itself stepped. The assignment is left to the reassignment and
+// the final bookkeeping of refineSurfaces, which rebuild it.
 void splitSteps(const PointCloud& cloud, DetectionResult& result, const RefineOptions& options) {
   const FitScales scales = fitScales(result, options);
   const std::size_t minPoints = std::max<std::size_t>(1, result.minPoints);
   std::vector<Surface> pending(std::make_move_iterator(result.surfaces.rbegin()),
                                std::make_move_iterator(result.surfaces.rend()));
   result.surfaces.clear();
-  bool split = false;
   while (!pending.empty()) {
     Surface surf = std::move(pending.back());
     pending.pop_back();
-    surf.rms = rmsDistance(cloud, surf.inliers, surf);
     if (auto parts = steppedCylinders(cloud, surf, minPoints, result.epsilon, scales, options)) {
       pending.push_back(std::move(parts->second));
       pending.push_back(std::move(parts->first));
-      split = true;
     } else {
       result.surfaces.push_back(std::move(surf));
     }
-  }
-  if (!split) return;
-  std::fill(result.assignment.begin(), result.assignment.end(), -1);
-  for (std::size_t s = 0; s < result.surfaces.size(); ++s) {
-    for (std::uint32_t i : result.surfaces[s].inliers) result.assignment[i] = int(s);
   }
 }
 

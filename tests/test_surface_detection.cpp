@@ -486,6 +486,21 @@ TEST(SurfaceRefinement, AFitMinimisesThePointsHuberLossesAtAnyPointCount) {
   }
 }
 
+// A detection result holding one surface `s` with every point of `cloud` as
+// its inliers (diagonal `diag`, inlier distance `eps`, at least 50 points).
+DetectionResult oneSurface(const PointCloud& cloud, Surface s, double diag, double eps) {
+  DetectionResult result;
+  result.diagonal = diag;
+  result.epsilon = eps;
+  result.clusterEpsilon = 0.2;
+  result.minPoints = 50;
+  result.status = DetectionResult::Status::Ok;
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) s.inliers.push_back(i);
+  result.surfaces.push_back(std::move(s));
+  result.assignment.assign(cloud.size(), 0);
+  return result;
+}
+
 // A lug's flat side that detection took as a wide cylinder (together with a
 // strip of the round next to it) is a plane once only its own points are
 // left: the refinement gives the plane, not a cylinder of radius far beyond
@@ -500,18 +515,11 @@ TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
     cloud.points.push_back(offsetPoint + u * frame.col(1) + v * frame.col(2));
     cloud.normals.push_back(normal);
   }
-  DetectionResult result;
-  result.diagonal = 5.0;  // the part the side belongs to
-  result.epsilon = 0.025;
-  result.clusterEpsilon = 0.2;
-  result.minPoints = 50;
-  result.status = DetectionResult::Status::Ok;
   Surface wide;
   // Radius 4, bent away from the points' plane by up to 0.28 at the patch ends.
   wide.shape = CylinderSurface{offsetPoint - 4.0 * normal + 1.5 * frame.col(1), frame.col(2), 4.0};
-  for (std::uint32_t i = 0; i < cloud.size(); ++i) wide.inliers.push_back(i);
-  result.surfaces.push_back(wide);
-  result.assignment.assign(cloud.size(), 0);
+  // Diagonal 5: the part the side belongs to.
+  DetectionResult result = oneSurface(cloud, wide, 5.0, 0.025);
 
   refineSurfaces(cloud, result);
   ASSERT_EQ(result.surfaces.size(), 1u);
@@ -557,19 +565,6 @@ void addHole(PointCloud& cloud, Rng& rng, const Mat3& frame, const Vec3& origin,
     cloud.points.push_back(origin + rho * radial + h * frame.col(2));
     cloud.normals.push_back(-radial);
   }
-}
-
-DetectionResult oneSurface(const PointCloud& cloud, Surface s, double diag, double eps) {
-  DetectionResult result;
-  result.diagonal = diag;
-  result.epsilon = eps;
-  result.clusterEpsilon = 0.2;
-  result.minPoints = 50;
-  result.status = DetectionResult::Status::Ok;
-  for (std::uint32_t i = 0; i < cloud.size(); ++i) s.inliers.push_back(i);
-  result.surfaces.push_back(std::move(s));
-  result.assignment.assign(cloud.size(), 0);
-  return result;
 }
 
 // A through hole of radius 0.38 and its counterbore of radius 0.444 (082 of
@@ -647,7 +642,13 @@ TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinder
   // An exact cylinder: distances equal to rounding, bands of rounding.
   PointCloud exact;
   addHole(exact, rng, frame, origin, 0.444, -0.7, 1.95, 1 << 30, 1500);
-  for (const PointCloud* c : {&single, &noisy, &conical, &rod, &hexagons, &exact}) {
+  // Two exact cylinders, one after the other along the axis, whose radii
+  // (0.444 and 0.4448) differ by less than the position scale (0.0014, 2 %
+  // of epsilon): an empty band, but no step the scan can show.
+  PointCloud fine;
+  addHole(fine, rng, frame, origin, 0.444, -0.7, 0.95, 1 << 30, 900);
+  addHole(fine, rng, frame, origin, 0.4448, 0.95, 1.95, 1 << 30, 600);
+  for (const PointCloud* c : {&single, &noisy, &conical, &rod, &hexagons, &exact, &fine}) {
     DetectionResult one = oneSurface(*c, merged, diag, eps);
     refineSurfaces(*c, one);
     EXPECT_EQ(one.surfaces.size(), 1u) << describe(one.surfaces[0]);
