@@ -86,6 +86,10 @@ struct Candidate {
 /// candidates removes the worst-supported cuboids first, then the others by
 /// support. The cap extension adds a copy of a cylinder that reaches a
 /// perpendicular plane patch past its end across a coaxial chamfer or round.
+/// A convex cylinder or cone patch whose inliers leave an empty band across
+/// the whole circumference (a groove in a boss, a neck between two shoulders
+/// of the same radius) also gives one bounded primitive per band, its ends
+/// snapped onto the fitted planes there; the whole patch's primitive stays.
 struct HypothesisOptions {
   double voxelSize = 0.0;                  ///< fit threshold, scan units; 0: OBB longest side / 64
   double parallelTolerance = 2.0;          ///< degrees; normals and axes this close are parallel
@@ -102,6 +106,8 @@ struct HypothesisOptions {
       true;  ///< cylinder and cone ends onto the fitted planes that cap or cross them
   bool extendOpenEnds =
       true;                ///< also cylinders run out to the scan's extent past ends on no plane
+  bool axialBands = true;  ///< also one cylinder or frustum per band of a convex patch that an
+                           ///< empty gap across its whole circumference splits (a groove, a neck)
   std::uint32_t seed = 1;  ///< seed of CGAL's bounding-box search
 };
 
@@ -155,6 +161,7 @@ struct HypothesisStats {
   std::size_t ownBoundsDropped = 0;   ///< additional boxes equal to their quadric's own box
   std::size_t quarterCylinders = 0;   ///< cylinder patches given a maximal box
   std::size_t extendedCylinders = 0;  ///< cylinders extended to a cap plane or past an open end
+  std::size_t axialBands = 0;         ///< bands of split cylinder and cone patches
   std::size_t skippedSurfaces = 0;    ///< too few inliers or invalid parameters
   bool capped = false;                ///< maxCandidates removed candidates
   double voxelSize = 0.0;             ///< fit threshold used, scan units

@@ -10,6 +10,8 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include "primitives/hypotheses_internal.h"
 
@@ -358,6 +360,63 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
   }
 }
 
+// The bands of a convex cylinder or cone patch that empty gaps across its
+// whole circumference separate: a groove cut into a boss, a neck between two
+// shoulders of the same radius, the rounded ends of two parallel plates on
+// one axis; one surface to the detection. Bounded by all its inliers, the
+// quadric fills the gap with material that is not there. Each band is the
+// patch's quadric bounded by its own inliers, its ends snapped onto the
+// fitted planes there (the groove's walls). A gap counts when it is wider
+// than twice the duplicate tolerance, than the span that holds ten inliers at
+// the patch's mean density along the axis (the sampling leaves no such gap
+// by chance) and than six deviations of the patch's noise (each band's edge
+// spreads three into the gap, and the band ends there are no better known).
+// Only the dense part of the patch is split (a sparse tail is no band).
+// Empty when the patch is one band, or more than kMaxBands (ribs or threads:
+// the whole patch stands for them), and for a hole: a hole through two
+// walls, subtracted whole, mostly cuts the air between them, and splitting
+// holes lowered as many InverseCSG parts as it raised.
+std::vector<Quadric> axialBands(const Context& ctx, const Quadric& q,
+                                const std::vector<PlaneInfo>& planes) {
+  constexpr std::size_t kMaxBands = 4;
+  if (!q.axial || (q.primitive.as<Cylinder>() == nullptr && q.primitive.as<Cone>() == nullptr))
+    return {};
+  if (!ctx.surfaces[q.surface].convex) return {};
+  std::vector<std::pair<double, std::size_t>> t;
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    const double ti = (q.points[i] - q.axisPoint).dot(q.axis);
+    if (ti >= q.dense.lo && ti <= q.dense.hi) t.emplace_back(ti, i);
+  }
+  if (t.size() < 2 * kMinInliers || !(q.dense.size() > 0.0)) return {};
+  std::sort(t.begin(), t.end());
+  const double minGap =
+      std::max({2.0 * ctx.lengthTol, 10.0 * q.dense.size() / static_cast<double>(t.size()),
+                6.0 * q.sigma});
+  std::vector<std::size_t> starts{0};  // first index of each band in t
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    if (t[k].first - t[k - 1].first > minGap) starts.push_back(k);
+  }
+  if (starts.size() < 2 || starts.size() > kMaxBands) return {};
+  starts.push_back(t.size());
+  std::vector<Quadric> out;
+  for (std::size_t b = 0; b + 1 < starts.size(); ++b) {
+    const std::size_t first = starts[b], last = starts[b + 1] - 1;
+    if (last + 1 - first < kMinInliers) continue;
+    Quadric band = q;
+    band.points.clear();
+    for (std::size_t k = first; k <= last; ++k) band.points.push_back(q.points[t[k].second]);
+    // The patch's own (snapped) ends stay; the gap's edges are the inliers'.
+    band.extent = {b == 0 ? q.extent.lo : t[first].first,
+                   last + 1 == t.size() ? q.extent.hi : t[last].first};
+    if (!(band.extent.size() > 1e-6 * ctx.diagonal)) continue;
+    band.dense = band.extent;
+    band.capped = {false, false};
+    snapEndsToPlanes(ctx, band, planes);  // with no plane there, sets the band's own ends
+    out.push_back(std::move(band));
+  }
+  return out;
+}
+
 // True when the plane n·x = offset is (within tolerance) one of the fitted planes.
 bool isFittedPlane(const Context& ctx, const Vec3& n, const Vec3& onPlane,
                    const std::vector<PlaneInfo>& planes) {
@@ -402,6 +461,15 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
     const int index = static_cast<int>(s);
     out.push_back(
         makeCandidate(CsgTree::leaf(q.primitive), CandidateOrigin::Quadric, {index}, support));
+
+    if (ctx.options.axialBands) {
+      for (const Quadric& band :
+           axialBands(ctx, q, ctx.options.snapToPlanes ? planes : std::vector<PlaneInfo>{})) {
+        out.push_back(makeCandidate(CsgTree::leaf(band.primitive), CandidateOrigin::Quadric,
+                                    {index}, static_cast<double>(band.points.size())));
+        ++stats.axialBands;
+      }
+    }
 
     // A cylinder extended to the cap plane beyond a chamfer.
     if (const auto* cyl = q.primitive.as<Cylinder>(); cyl != nullptr && ctx.options.extendToCaps) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -382,6 +383,111 @@ TEST(Hypotheses, CylinderEndsLeaveTheSparseNoiseTailsOfTheirNeighbours) {
   for (std::size_t k = 0; k < from.size(); ++k) (k % 8 == 0 ? to : kept).push_back(from[k]);
   from = kept;
   EXPECT_NEAR(shankTop(surfaces), 4.5, 1e-9);
+}
+
+// A boss (radius 3, z = 0.25 to 2.75) with a groove (radius 2.5, z = 1.75
+// to 2.25) on a base plate: the detection takes the boss's side above and
+// below the groove as one cylinder, which bounded by its inliers fills the
+// groove. Each band it leaves is a candidate too, its ends on the groove's
+// walls; the whole cylinder stays. With noise the bands' edges spread into
+// the gap (at 0.5 % of D, σ = 0.07, three deviations from each side close
+// all but 0.08 of the 0.5 gap, under twice the duplicate tolerance); at
+// 0.25 % the gap stays open.
+TEST(Hypotheses, AGroovedCylinderAlsoGivesOneCylinderPerBand) {
+  const CsgTree tree = CsgTree::unite({
+      CsgTree::leaf(Box{Vec3(0, 0, -0.5), Mat3::Identity(), Vec3(5, 5, 0.75)}),  // top z = 0.25
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 1.0), Vec3::UnitZ(), 3.0, 1.5}),         // z 0.25..1.75
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 2.0), Vec3::UnitZ(), 2.5, 0.5}),         // z 1.75..2.25
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 2.5), Vec3::UnitZ(), 3.0, 0.5}),         // z 2.25..2.75
+  });
+  for (const double noise : {0.0, 0.5 * kNoise}) {
+    SCOPED_TRACE(noise);
+    const GroundTruth gt = makeGroundTruth(tree, 40000, noise, 5);
+    const int lower = surfaceOf(gt, 1, 0), upper = surfaceOf(gt, 3, 0);
+    ASSERT_GE(lower, 0);
+    ASSERT_GE(upper, 0);
+    // The detection's view: one cylinder with the inliers of both bands.
+    std::vector<Surface> surfaces;
+    for (std::size_t s = 0; s < gt.surfaces.size(); ++s) {
+      if (int(s) == upper) continue;
+      surfaces.push_back(gt.surfaces[s]);
+      if (int(s) == lower) {
+        auto& in = surfaces.back().inliers;
+        const auto& more = gt.surfaces[std::size_t(upper)].inliers;
+        in.insert(in.end(), more.begin(), more.end());
+      }
+    }
+    const auto radius3 = [](const HypothesisSet& set) {
+      std::vector<std::pair<double, double>> spans;  // z ranges of the radius-3 cylinders
+      for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
+        const Cylinder* k = c->tree.root()->primitive.as<Cylinder>();
+        if (k == nullptr || std::abs(k->radius - 3.0) > 0.05) continue;
+        const double half = 0.5 * k->height * std::abs(k->axis.z());
+        spans.emplace_back(k->center.z() - half, k->center.z() + half);
+      }
+      std::sort(spans.begin(), spans.end());
+      return spans;
+    };
+    const HypothesisSet set = generateHypotheses(gt.scan, surfaces);
+    const auto spans = radius3(set);
+    ASSERT_EQ(spans.size(), 3u);
+    EXPECT_EQ(set.stats.axialBands, 2u);
+    // Whole, lower band, upper band: every end on its fitted plane.
+    const double tol = noise > 0.0 ? 0.02 : 1e-9;
+    EXPECT_NEAR(spans[0].first, 0.25, tol);
+    EXPECT_NEAR(spans[0].second, 1.75, tol);
+    EXPECT_NEAR(spans[1].first, 0.25, tol);
+    EXPECT_NEAR(spans[1].second, 2.75, tol);
+    EXPECT_NEAR(spans[2].first, 2.25, tol);
+    EXPECT_NEAR(spans[2].second, 2.75, tol);
+
+    HypothesisOptions off;
+    off.axialBands = false;
+    EXPECT_EQ(radius3(generateHypotheses(gt.scan, surfaces, off)).size(), 1u);
+  }
+}
+
+// A shaft with a cross hole: the hole interrupts the side over part of the
+// circumference only, so the side's inliers leave no empty band and the
+// shaft stays one cylinder. A hole through two walls, taken as one surface,
+// stays one too: subtracted whole it cuts only the air between the walls.
+TEST(Hypotheses, ACrossHoleOrAHoleThroughTwoWallsSplitsNoBand) {
+  const CsgTree shaft = CsgTree::subtract({
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 0), Vec3::UnitZ(), 1.0, 8.0}),
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 0), Vec3::UnitX(), 0.6, 4.0}),
+  });
+  const GroundTruth gt = makeGroundTruth(shaft, 30000, 0.0, 5);
+  EXPECT_EQ(generateHypotheses(gt.scan, gt.surfaces).stats.axialBands, 0u);
+
+  // Two walls (x = -4 to -3.5 and 3.5 to 4) on a base, a hole of radius 0.5
+  // along x through both.
+  const CsgTree walls = CsgTree::subtract({
+      CsgTree::unite({
+          CsgTree::leaf(Box{Vec3(0, 0, 0.25), Mat3::Identity(), Vec3(4, 2, 0.25)}),
+          CsgTree::leaf(Box{Vec3(-3.75, 0, 2), Mat3::Identity(), Vec3(0.25, 2, 2)}),
+          CsgTree::leaf(Box{Vec3(3.75, 0, 2), Mat3::Identity(), Vec3(0.25, 2, 2)}),
+      }),
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 2.5), Vec3::UnitX(), 0.5, 9.0}),
+  });
+  const GroundTruth wallsGt = makeGroundTruth(walls, 30000, 0.0, 5);
+  // The hole's two pieces (one per wall) as one surface.
+  std::vector<Surface> surfaces;
+  int hole = -1;
+  for (std::size_t s = 0; s < wallsGt.surfaces.size(); ++s) {
+    const auto* c = wallsGt.surfaces[s].as<CylinderSurface>();
+    if (c == nullptr) {
+      surfaces.push_back(wallsGt.surfaces[s]);
+    } else if (hole < 0) {
+      hole = int(surfaces.size());
+      surfaces.push_back(wallsGt.surfaces[s]);
+    } else {
+      auto& in = surfaces[std::size_t(hole)].inliers;
+      in.insert(in.end(), wallsGt.surfaces[s].inliers.begin(), wallsGt.surfaces[s].inliers.end());
+    }
+  }
+  ASSERT_GE(hole, 0);
+  ASSERT_FALSE(surfaces[std::size_t(hole)].convex);
+  EXPECT_EQ(generateHypotheses(wallsGt.scan, surfaces).stats.axialBands, 0u);
 }
 
 // Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
