@@ -32,6 +32,33 @@ TEST(VoxelGrid, AroundABoxPutsTheResolutionOnTheLongestSideWithItsMargin) {
   EXPECT_LT((g.halfSize - Vec3(32, 12, 7)).norm(), 1e-12);
 }
 
+// A side a whole number of voxels long, give or take the rounding of fitted
+// surfaces, gets no extra voxel: the grid, centred on the box, would
+// otherwise shift by half a voxel and put a layer of voxel centres on each
+// face of the part that lies a whole number of voxels from its ends (a
+// centre on a face is labelled inside or outside at random).
+TEST(VoxelGrid, ASideOfWholeVoxelsPlusRoundingGetsNoExtraVoxel) {
+  OrientedBox box;
+  box.center = Vec3(0, 0, 0);
+  box.axes = Mat3::Identity();
+  // 60 x 60 x 33 voxels of size 1/6 (10 x 10 x 5.5), the last side 3e-4
+  // voxels long: a frame tilted by 5e-6 rad around points 10 wide.
+  box.halfSize = Vec3(5, 5, 2.75 + 0.5 * 5e-5);
+  const VoxelGrid grid = VoxelGrid::around(box, GridOptions{64, 2});
+  EXPECT_NEAR(grid.voxelSize(), 1.0 / 6.0, 1e-12);
+  EXPECT_EQ(grid.dims(), (std::array<int, 3>{64, 64, 37}));
+  // The top and bottom faces (z = +-2.75) and a face 3 voxels below the top
+  // lie half a voxel from the nearest centres.
+  for (const double z : {-2.75, 2.75, 2.25}) {
+    const double k = grid.toGrid(Vec3(0, 0, z)).z() - 0.5;  // in centre units
+    EXPECT_NEAR(std::abs(k - std::round(k)), 0.5, 1e-3) << z;
+  }
+  // A side a hundredth of a voxel longer than whole voxels still gets the
+  // voxel that holds it.
+  box.halfSize.z() = 2.75 + 0.5 * 0.02 / 6.0;
+  EXPECT_EQ(VoxelGrid::around(box, GridOptions{64, 2}).dims()[2], 38);
+}
+
 TEST(VoxelGrid, VoxelCentresAndIndicesRoundTrip) {
   const VoxelGrid grid(Vec3(-1, 0, 2), rotation(40, Vec3(0, 1, 1)), 0.5, {5, 4, 3});
   ASSERT_EQ(grid.voxelCount(), 60u);

@@ -19,9 +19,17 @@ VoxelGrid VoxelGrid::around(const OrientedBox& box, const GridOptions& options) 
   const double margin = std::max(0.0, options.marginVoxels);
   // The longest side (plus margins) holds `resolution` voxels.
   const double size = longest / std::max(1.0, options.resolution - 2.0 * margin);
+  // A side that passes a whole number of voxels by under a hundredth of one
+  // (the rounding of a box around fitted surfaces, a frame tilted by a few
+  // microradians) gets no extra voxel: the grid is centred on the box, and
+  // one voxel more would shift it by half a voxel, putting a layer of voxel
+  // centres on every face of the part a whole number of voxels from its
+  // ends, where the labels say inside or outside at random. What is cut
+  // off lies in the margin (without one, only rounding is forgiven).
+  const double slack = margin >= 0.01 ? 0.01 : 1e-9;
   std::array<int, 3> dims;
   for (int a = 0; a < 3; ++a) {
-    dims[a] = std::max(1, int(std::ceil(2.0 * box.halfSize[a] / size + 2.0 * margin - 1e-9)));
+    dims[a] = std::max(1, int(std::ceil(2.0 * box.halfSize[a] / size + 2.0 * margin - slack)));
   }
   const Vec3 extent(dims[0] * size, dims[1] * size, dims[2] * size);
   const Vec3 origin = box.center - box.axes * (0.5 * extent);
