@@ -10,7 +10,6 @@
 #include <limits>
 #include <numbers>
 #include <optional>
-#include <utility>
 #include <vector>
 
 #include "primitives/hypotheses_internal.h"
@@ -376,43 +375,48 @@ void snapEndsToPlanes(const Context& ctx, Quadric& q, const std::vector<PlaneInf
 // the whole patch stands for them), and for a hole: a hole through two
 // walls, subtracted whole, mostly cuts the air between them, and splitting
 // holes lowered as many InverseCSG parts as it raised.
-std::vector<Quadric> axialBands(const Context& ctx, const Quadric& q,
-                                const std::vector<PlaneInfo>& planes) {
+// A band: its bounded primitive and how many inliers it holds.
+struct Band {
+  Primitive primitive;
+  std::size_t inliers = 0;
+};
+
+std::vector<Band> axialBands(const Context& ctx, const Quadric& q,
+                             const std::vector<PlaneInfo>& planes) {
   constexpr std::size_t kMaxBands = 4;
-  if (!q.axial || (q.primitive.as<Cylinder>() == nullptr && q.primitive.as<Cone>() == nullptr))
-    return {};
-  if (!ctx.surfaces[q.surface].convex) return {};
-  std::vector<std::pair<double, std::size_t>> t;
-  for (std::size_t i = 0; i < q.points.size(); ++i) {
-    const double ti = (q.points[i] - q.axisPoint).dot(q.axis);
-    if (ti >= q.dense.lo && ti <= q.dense.hi) t.emplace_back(ti, i);
-  }
-  if (t.size() < 2 * kMinInliers || !(q.dense.size() > 0.0)) return {};
+  if (q.primitive.as<Cylinder>() == nullptr && q.primitive.as<Cone>() == nullptr) return {};
+  if (!ctx.surfaces[q.surface].convex || !(q.dense.size() > 0.0)) return {};
+  std::vector<double> t = axialPositions(q.points, q.axisPoint, q.axis);
+  std::erase_if(t, [&](double v) { return v < q.dense.lo || v > q.dense.hi; });
+  if (t.size() < 2 * kMinInliers) return {};
   std::sort(t.begin(), t.end());
   const double minGap =
       std::max({2.0 * ctx.lengthTol, 10.0 * q.dense.size() / static_cast<double>(t.size()),
                 6.0 * q.sigma});
   std::vector<std::size_t> starts{0};  // first index of each band in t
   for (std::size_t k = 1; k < t.size(); ++k) {
-    if (t[k].first - t[k - 1].first > minGap) starts.push_back(k);
+    if (t[k] - t[k - 1] > minGap) starts.push_back(k);
   }
   if (starts.size() < 2 || starts.size() > kMaxBands) return {};
   starts.push_back(t.size());
-  std::vector<Quadric> out;
+  std::vector<Band> out;
   for (std::size_t b = 0; b + 1 < starts.size(); ++b) {
     const std::size_t first = starts[b], last = starts[b + 1] - 1;
     if (last + 1 - first < kMinInliers) continue;
-    Quadric band = q;
-    band.points.clear();
-    for (std::size_t k = first; k <= last; ++k) band.points.push_back(q.points[t[k].second]);
+    // The quadric over the band alone (snapEndsToPlanes reads no points).
     // The patch's own (snapped) ends stay; the gap's edges are the inliers'.
-    band.extent = {b == 0 ? q.extent.lo : t[first].first,
-                   last + 1 == t.size() ? q.extent.hi : t[last].first};
+    Quadric band;
+    band.surface = q.surface;
+    band.primitive = q.primitive;
+    band.sigma = q.sigma;
+    band.axial = true;
+    band.axis = q.axis;
+    band.axisPoint = q.axisPoint;
+    band.extent = {b == 0 ? q.extent.lo : t[first], last + 1 == t.size() ? q.extent.hi : t[last]};
     if (!(band.extent.size() > 1e-6 * ctx.diagonal)) continue;
     band.dense = band.extent;
-    band.capped = {false, false};
     snapEndsToPlanes(ctx, band, planes);  // with no plane there, sets the band's own ends
-    out.push_back(std::move(band));
+    out.push_back({band.primitive, last + 1 - first});
   }
   return out;
 }
@@ -441,7 +445,7 @@ Candidate makeCandidate(CsgTree tree, CandidateOrigin origin, std::vector<int> s
 
 std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& stats) {
   std::vector<Candidate> out;
-  const std::vector<PlaneInfo> planes = planeInfos(ctx);
+  const std::vector<PlaneInfo> planes = planeInfos(ctx), noPlanes;
   std::vector<std::optional<Quadric>> quadrics(ctx.surfaces.size());
   for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
     const Surface& surface = ctx.surfaces[s];
@@ -463,10 +467,9 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
         makeCandidate(CsgTree::leaf(q.primitive), CandidateOrigin::Quadric, {index}, support));
 
     if (ctx.options.axialBands) {
-      for (const Quadric& band :
-           axialBands(ctx, q, ctx.options.snapToPlanes ? planes : std::vector<PlaneInfo>{})) {
+      for (const Band& band : axialBands(ctx, q, ctx.options.snapToPlanes ? planes : noPlanes)) {
         out.push_back(makeCandidate(CsgTree::leaf(band.primitive), CandidateOrigin::Quadric,
-                                    {index}, static_cast<double>(band.points.size())));
+                                    {index}, static_cast<double>(band.inliers)));
         ++stats.axialBands;
       }
     }
