@@ -305,6 +305,7 @@ nlohmann::ordered_json jobReport(const std::filesystem::path& scanPath, const Sc
                         {"truncation_roots", st.truncationRoots},
                         {"subtrees", st.subtrees},
                         {"union_candidates", st.unionCandidates},
+                        {"selected", st.selected},
                         {"chosen", st.chosen},
                         {"proved_optimal", st.provedOptimal},
                         {"time_limit_hit", rec.timeLimitHit}};

@@ -102,6 +102,7 @@ Construction constructCsg(std::span<const CsgTree> candidates, std::span<const D
   if (!u.provedOptimal) out.stats.provedOptimal = false;
   std::vector<UnionMember> members;
   for (std::uint32_t i : u.chosen) members.push_back(pool[i]);
+  out.stats.selected = members.size();
   if (progress) progress(0.95, "union");
 
   if (options.refine) {

@@ -50,7 +50,10 @@ struct ConstructStats {
   std::size_t truncationRoots = 0;  ///< RPr': to be truncated (after removing duplicates of RPr)
   std::size_t subtrees = 0;         ///< subtrees built in phase 1 with no outside voxels left
   std::size_t unionCandidates = 0;  ///< M: candidates of phase 2
-  std::size_t chosen = 0;           ///< candidates in the union
+  std::size_t selected = 0;         ///< candidates phase 2's selection put in the union
+  std::size_t chosen = 0;           ///< members of the final union: the selected ones after the
+                                    ///< union's refinement (which adds primitives and subtrees
+                                    ///< outside phase 2's candidates) and the no-op removal
   bool provedOptimal = true;        ///< every solve finished its branch and bound
 };
 

@@ -102,8 +102,11 @@ void voxelMethod(Reconstruction& out, const PointCloud& scan, const ReconstructO
   out.construction = constructCsg(candidates, descriptions, out.labels.inside, co, report);
   out.timeLimitHit = out.timeLimitHit || Clock::now() > deadline;
   const ConstructStats& st = out.construction.stats;
-  clock.finish(std::to_string(st.chosen) + " of " + std::to_string(st.unionCandidates) +
-               " union candidates" + (st.provedOptimal ? ", proved optimal" : ""));
+  clock.finish(std::to_string(st.chosen) +
+               (st.chosen == 1 ? " union member (" : " union members (") +
+               std::to_string(st.selected) + " of " + std::to_string(st.unionCandidates) +
+               " candidates selected" + (st.chosen != st.selected ? ", then refined" : "") +
+               (st.provedOptimal ? ", proved optimal)" : ")"));
   out.tree = out.construction.tree;
   out.voxels = out.construction.voxels;
 }
