@@ -189,12 +189,46 @@ void angularSpan(const Quadric& q, double& start, double& coverage) {
   coverage = 2.0 * kPi - gap;
 }
 
+// Plane surfaces as seen by the cap extension and the separator filter.
+struct PlaneInfo {
+  std::size_t surface = 0;
+  Vec3 normal = Vec3::UnitZ();
+  double offset = 0.0;
+  Vec3 centroid = Vec3::Zero();
+  std::vector<Vec3> sample;  // up to 512 inliers, evenly spread
+};
+
 // Wu Fig. 6(2): the maximal box of a quarter cylinder, a square of side r
-// with a corner on the axis, spanning the quarter.
-Box quarterBox(const Quadric& q, double radius, double start, double coverage) {
+// with a corner on the axis, spanning the quarter. Its sides lie along the
+// normals of the planes the quarter meets tangentially (a rounded edge). The
+// points' span is not exact there: the inliers run a little onto the planes,
+// where plane and cylinder agree within the noise, which turns the box by up
+// to half the excess and leaves slivers along both edges. So when a fitted
+// plane parallel to the axis lies at the radius from it with its normal
+// within the quarter tolerance of a side, the box turns onto that normal
+// (the nearest such plane decides).
+Box quarterBox(const Context& ctx, const Quadric& q, double radius, double start, double coverage,
+               const std::vector<PlaneInfo>& planes) {
   const Mat3 f = frameFromAxis(q.axis);
-  const double mid = start + 0.5 * coverage;
+  double mid = start + 0.5 * coverage;
   auto dir = [&](double ang) { return Vec3(std::cos(ang) * f.col(0) + std::sin(ang) * f.col(1)); };
+  const double sinParallel = std::sqrt(std::max(0.0, 1.0 - ctx.cosParallel * ctx.cosParallel));
+  double turn = ctx.options.quarterTolerance * kPi / 180.0;
+  bool snapped = false;
+  for (const PlaneInfo& pl : planes) {
+    if (std::abs(pl.normal.dot(q.axis)) > sinParallel) continue;
+    if (std::abs(std::abs(pl.normal.dot(q.axisPoint) - pl.offset) - radius) >
+        ctx.lengthTol + 2.0 * q.sigma) {
+      continue;
+    }
+    const double a = std::atan2(pl.normal.dot(f.col(1)), pl.normal.dot(f.col(0)));
+    for (double side : {mid - 0.25 * kPi, mid + 0.25 * kPi}) {
+      // The normal's angle from the side, modulo a half turn (its sign is free).
+      const double d = std::remainder(a - side, kPi);
+      if (std::abs(d) < std::abs(turn)) turn = d, snapped = true;
+    }
+  }
+  if (snapped) mid += turn;
   Mat3 frame;
   frame.col(0) = dir(mid - 0.25 * kPi);
   frame.col(1) = dir(mid + 0.25 * kPi);
@@ -220,15 +254,6 @@ Box axialMinimalBox(const Quadric& q) {
   frame.col(1) = q.axis.cross(frame.col(0));
   return boxAround(frame, q.points, q.sigma);
 }
-
-// Plane surfaces as seen by the cap extension and the separator filter.
-struct PlaneInfo {
-  std::size_t surface = 0;
-  Vec3 normal = Vec3::UnitZ();
-  double offset = 0.0;
-  Vec3 centroid = Vec3::Zero();
-  std::vector<Vec3> sample;  // up to 512 inliers, evenly spread
-};
 
 std::vector<PlaneInfo> planeInfos(const Context& ctx) {
   std::vector<PlaneInfo> planes;
@@ -535,7 +560,8 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
       double start = 0.0, coverage = 0.0;
       angularSpan(q, start, coverage);
       if (std::abs(coverage - 0.5 * kPi) <= ctx.options.quarterTolerance * kPi / 180.0) {
-        box = quarterBox(q, cyl->radius, start, coverage);
+        box = quarterBox(ctx, q, cyl->radius, start, coverage,
+                         ctx.options.snapToPlanes ? planes : noPlanes);
         ++stats.quarterCylinders;
       }
     }

@@ -521,6 +521,54 @@ TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
   EXPECT_FALSE(difference.contains(inCylinder));
 }
 
+// The quarter's inliers run a little onto a plane it meets tangentially (as
+// RANSAC's do: there plane and cylinder agree within the noise). Their span,
+// 101 degrees, would turn the box by 5.7 degrees and move its centre by 0.14;
+// the box turns back onto the tangent planes' normals and is exact.
+TEST(Hypotheses, QuarterBoxLiesAlongTheTangentPlanes) {
+  const double r = 3.0;
+  const CsgTree tree = CsgTree::unite({
+      CsgTree::leaf(Box{Vec3(5, 3.5, 10), Mat3::Identity(), Vec3(5, 3.5, 10)}),  // [0,10] x [0,7]
+      CsgTree::leaf(Box{Vec3(3.5, 5, 10), Mat3::Identity(), Vec3(3.5, 5, 10)}),  // [0,7] x [0,10]
+      CsgTree::leaf(Cylinder{Vec3(7, 7, 10), Vec3::UnitZ(), r, 20.0}),
+  });
+  const GroundTruth gt = makeGroundTruth(tree, 20000, 0.0, 9);
+  std::vector<Surface> surfaces = gt.surfaces;
+  auto quarter = std::find_if(surfaces.begin(), surfaces.end(),
+                              [](const Surface& s) { return s.as<CylinderSurface>() != nullptr; });
+  ASSERT_NE(quarter, surfaces.end());
+  std::size_t added = 0;
+  for (std::size_t i = 0; i < gt.clean.size(); ++i) {
+    const Vec3& p = gt.clean[i];
+    if (std::abs(p.x() - 10.0) < 1e-9 && p.y() > 6.4 && p.y() < 7.0) {
+      quarter->inliers.push_back(std::uint32_t(i));
+      ++added;
+    }
+  }
+  ASSERT_GT(added, 20u);
+
+  auto quarterBox = [&](const HypothesisOptions& options) {
+    const HypothesisSet set = generateHypotheses(gt.scan, surfaces, options);
+    EXPECT_EQ(set.stats.quarterCylinders, 1u);
+    const auto additional = ofOrigin(set, CandidateOrigin::Additional);
+    EXPECT_EQ(additional.size(), 1u);
+    return additional.empty() ? Box{} : *additional[0]->tree.root()->primitive.as<Box>();
+  };
+  const Box b = quarterBox(HypothesisOptions{});
+  test::expectNear(b.center, Vec3(8.5, 8.5, 10), 0.005);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(b.axes.col(k).cwiseAbs().maxCoeff(), 1.0, 1e-9) << "axis " << k;
+  }
+  Vec3 sizes = b.halfSize;
+  std::sort(sizes.data(), sizes.data() + 3);
+  test::expectNear(sizes, Vec3(1.5, 1.5, 10), 0.005);
+
+  // Without the planes the box follows the points' span.
+  HypothesisOptions noSnap;
+  noSnap.snapToPlanes = false;
+  EXPECT_GT((quarterBox(noSnap).center - Vec3(8.5, 8.5, 10)).norm(), 0.1);
+}
+
 // Wu §4.1: every additional box comes with box − quadric and box ∩ quadric
 // built from exactly that box and quadric. The obround slot of rotated_block
 // has two half-cylinder ends, whose minimal boxes are half as wide as their
