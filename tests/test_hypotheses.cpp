@@ -447,6 +447,66 @@ TEST(Hypotheses, AGroovedCylinderAlsoGivesOneCylinderPerBand) {
   }
 }
 
+// A boss of radius 3 on a base, ringed by `grooves` grooves (radius 2.5) 0.5
+// wide between bands 0.5 tall from z = 0.25, and the detection's view: the
+// bands' sides as one cylinder surface. `rms` is that surface's residual.
+struct RingedBoss {
+  GroundTruth gt;
+  std::vector<Surface> surfaces;
+};
+RingedBoss ringedBoss(int grooves, double rms) {
+  std::vector<CsgTree> parts{
+      CsgTree::leaf(Box{Vec3(0, 0, -0.5), Mat3::Identity(), Vec3(5, 5, 0.75)}),  // top z = 0.25
+      CsgTree::leaf(Cylinder{Vec3(0, 0, 0.25 + 0.5 * grooves + 0.25), Vec3::UnitZ(), 2.5,
+                             1.0 * grooves + 0.5}),  // the core, z 0.25 to the top band's top
+  };
+  for (int b = 0; b <= grooves; ++b) {
+    parts.push_back(CsgTree::leaf(Cylinder{Vec3(0, 0, 0.5 + 1.0 * b), Vec3::UnitZ(), 3.0, 0.5}));
+  }
+  RingedBoss out{makeGroundTruth(CsgTree::unite(parts), 40000, 0.0, 5), {}};
+  std::vector<int> sides;
+  for (int b = 0; b <= grooves; ++b) sides.push_back(surfaceOf(out.gt, 2 + b, 0));
+  if (std::find(sides.begin(), sides.end(), -1) != sides.end()) {
+    ADD_FAILURE() << "a band's side is not among the visible surfaces";
+    return out;
+  }
+  for (std::size_t s = 0; s < out.gt.surfaces.size(); ++s) {
+    if (std::find(sides.begin() + 1, sides.end(), int(s)) != sides.end()) continue;
+    out.surfaces.push_back(out.gt.surfaces[s]);
+    if (int(s) != sides.front()) continue;
+    for (auto it = sides.begin() + 1; it != sides.end(); ++it) {
+      const auto& more = out.gt.surfaces[std::size_t(*it)].inliers;
+      out.surfaces.back().inliers.insert(out.surfaces.back().inliers.end(), more.begin(),
+                                         more.end());
+    }
+    out.surfaces.back().rms = rms;
+  }
+  return out;
+}
+
+// A gap between bands must be wider than six deviations of the patch's noise
+// (as the detection measured it): the 0.5 grooves split a surface of RMS
+// 0.07 (6 sigma = 0.42) and not one of RMS 0.1 (0.6), the points being the
+// same. And a patch of more than four bands (ribs, a thread) stays whole: 3
+// grooves give 4 bands, 4 grooves none.
+TEST(Hypotheses, BandsNeedGapsWiderThanTheNoiseAndAreFew) {
+  // Radius-3 cylinders among the candidates: the whole patch and its bands
+  // (the core's side, seen in the grooves, is split too, at radius 2.5).
+  const auto radius3 = [](const RingedBoss& boss) {
+    const HypothesisSet set = generateHypotheses(boss.gt.scan, boss.surfaces);
+    std::size_t n = 0;
+    for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
+      const Cylinder* k = c->tree.root()->primitive.as<Cylinder>();
+      n += k != nullptr && std::abs(k->radius - 3.0) < 0.05;
+    }
+    return n;
+  };
+  EXPECT_EQ(radius3(ringedBoss(1, 0.07)), 1u + 2u);
+  EXPECT_EQ(radius3(ringedBoss(1, 0.1)), 1u);
+  EXPECT_EQ(radius3(ringedBoss(3, 0.0)), 1u + 4u);
+  EXPECT_EQ(radius3(ringedBoss(4, 0.0)), 1u);
+}
+
 // A shaft with a cross hole: the hole interrupts the side over part of the
 // circumference only, so the side's inliers leave no empty band and the
 // shaft stays one cylinder. A hole through two walls, taken as one surface,
