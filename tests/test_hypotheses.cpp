@@ -550,16 +550,21 @@ TEST(Hypotheses, ACrossHoleOrAHoleThroughTwoWallsSplitsNoBand) {
   EXPECT_EQ(generateHypotheses(wallsGt.scan, surfaces).stats.axialBands, 0u);
 }
 
-// Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
-// maximal box of the quarter, with its corner on the axis.
-TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
-  const double r = 3.0;
+// A block [0,10] x [0,10] x [0,20] with one edge rounded (radius 3, axis
+// x = y = 7): a quarter cylinder between the planes x = 10 and y = 10.
+GroundTruth roundedBlock() {
   const CsgTree tree = CsgTree::unite({
       CsgTree::leaf(Box{Vec3(5, 3.5, 10), Mat3::Identity(), Vec3(5, 3.5, 10)}),  // [0,10] x [0,7]
       CsgTree::leaf(Box{Vec3(3.5, 5, 10), Mat3::Identity(), Vec3(3.5, 5, 10)}),  // [0,7] x [0,10]
-      CsgTree::leaf(Cylinder{Vec3(7, 7, 10), Vec3::UnitZ(), r, 20.0}),
+      CsgTree::leaf(Cylinder{Vec3(7, 7, 10), Vec3::UnitZ(), 3.0, 20.0}),
   });
-  const GroundTruth gt = makeGroundTruth(tree, 20000, 0.0, 9);
+  return makeGroundTruth(tree, 20000, 0.0, 9);
+}
+
+// Wu Fig. 6(2): a block with one rounded edge (a quarter cylinder) gets the
+// maximal box of the quarter, with its corner on the axis.
+TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
+  const GroundTruth gt = roundedBlock();
   const HypothesisSet set = generateHypotheses(gt.scan, gt.surfaces);
   EXPECT_EQ(set.stats.quarterCylinders, 1u);
   const auto additional = ofOrigin(set, CandidateOrigin::Additional);
@@ -583,16 +588,10 @@ TEST(Hypotheses, QuarterCylinderGetsTheMaximalBox) {
 
 // The quarter's inliers run a little onto a plane it meets tangentially (as
 // RANSAC's do: there plane and cylinder agree within the noise). Their span,
-// 101 degrees, would turn the box by 5.7 degrees and move its centre by 0.14;
+// 101 degrees, would turn the box by 5.7 degrees and move its centre by 0.2;
 // the box turns back onto the tangent planes' normals and is exact.
 TEST(Hypotheses, QuarterBoxLiesAlongTheTangentPlanes) {
-  const double r = 3.0;
-  const CsgTree tree = CsgTree::unite({
-      CsgTree::leaf(Box{Vec3(5, 3.5, 10), Mat3::Identity(), Vec3(5, 3.5, 10)}),  // [0,10] x [0,7]
-      CsgTree::leaf(Box{Vec3(3.5, 5, 10), Mat3::Identity(), Vec3(3.5, 5, 10)}),  // [0,7] x [0,10]
-      CsgTree::leaf(Cylinder{Vec3(7, 7, 10), Vec3::UnitZ(), r, 20.0}),
-  });
-  const GroundTruth gt = makeGroundTruth(tree, 20000, 0.0, 9);
+  const GroundTruth gt = roundedBlock();
   std::vector<Surface> surfaces = gt.surfaces;
   auto quarter = std::find_if(surfaces.begin(), surfaces.end(),
                               [](const Surface& s) { return s.as<CylinderSurface>() != nullptr; });
