@@ -212,11 +212,9 @@ Box quarterBox(const Context& ctx, const Quadric& q, double radius, double start
   const Mat3 f = frameFromAxis(q.axis);
   double mid = start + 0.5 * coverage;
   auto dir = [&](double ang) { return Vec3(std::cos(ang) * f.col(0) + std::sin(ang) * f.col(1)); };
-  const double sinParallel = std::sqrt(std::max(0.0, 1.0 - ctx.cosParallel * ctx.cosParallel));
-  double turn = ctx.options.quarterTolerance * kPi / 180.0;
-  bool snapped = false;
+  double within = ctx.options.quarterTolerance * kPi / 180.0, turn = 0.0;
   for (const PlaneInfo& pl : planes) {
-    if (std::abs(pl.normal.dot(q.axis)) > sinParallel) continue;
+    if (std::abs(pl.normal.dot(q.axis)) > ctx.sinOrthogonal) continue;  // not along the axis
     if (std::abs(std::abs(pl.normal.dot(q.axisPoint) - pl.offset) - radius) >
         ctx.lengthTol + 2.0 * q.sigma) {
       continue;
@@ -225,10 +223,10 @@ Box quarterBox(const Context& ctx, const Quadric& q, double radius, double start
     for (double side : {mid - 0.25 * kPi, mid + 0.25 * kPi}) {
       // The normal's angle from the side, modulo a half turn (its sign is free).
       const double d = std::remainder(a - side, kPi);
-      if (std::abs(d) < std::abs(turn)) turn = d, snapped = true;
+      if (std::abs(d) < within) within = std::abs(d), turn = d;
     }
   }
-  if (snapped) mid += turn;
+  mid += turn;
   Mat3 frame;
   frame.col(0) = dir(mid - 0.25 * kPi);
   frame.col(1) = dir(mid + 0.25 * kPi);
@@ -415,9 +413,8 @@ std::vector<Band> axialBands(const Context& ctx, const Quadric& q,
   std::erase_if(t, [&](double v) { return v < q.dense.lo || v > q.dense.hi; });
   if (t.size() < 2 * kMinInliers) return {};
   std::sort(t.begin(), t.end());
-  const double minGap =
-      std::max({2.0 * ctx.lengthTol, 10.0 * q.dense.size() / static_cast<double>(t.size()),
-                6.0 * q.sigma});
+  const double minGap = std::max(
+      {2.0 * ctx.lengthTol, 10.0 * q.dense.size() / static_cast<double>(t.size()), 6.0 * q.sigma});
   std::vector<std::size_t> starts{0};  // first index of each band in t
   for (std::size_t k = 1; k < t.size(); ++k) {
     if (t[k] - t[k - 1] > minGap) starts.push_back(k);
@@ -431,10 +428,8 @@ std::vector<Band> axialBands(const Context& ctx, const Quadric& q,
     // The quadric over the band alone (snapEndsToPlanes reads no points).
     // The patch's own (snapped) ends stay; the gap's edges are the inliers'.
     Quadric band;
-    band.surface = q.surface;
     band.primitive = q.primitive;
     band.sigma = q.sigma;
-    band.axial = true;
     band.axis = q.axis;
     band.axisPoint = q.axisPoint;
     band.extent = {b == 0 ? q.extent.lo : t[first], last + 1 == t.size() ? q.extent.hi : t[last]};
@@ -471,6 +466,8 @@ Candidate makeCandidate(CsgTree tree, CandidateOrigin origin, std::vector<int> s
 std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& stats) {
   std::vector<Candidate> out;
   const std::vector<PlaneInfo> planes = planeInfos(ctx), noPlanes;
+  // The planes that ends and quarter boxes snap onto (none without snapping).
+  const std::vector<PlaneInfo>& snapPlanes = ctx.options.snapToPlanes ? planes : noPlanes;
   std::vector<std::optional<Quadric>> quadrics(ctx.surfaces.size());
   for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
     const Surface& surface = ctx.surfaces[s];
@@ -492,7 +489,7 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
         makeCandidate(CsgTree::leaf(q.primitive), CandidateOrigin::Quadric, {index}, support));
 
     if (ctx.options.axialBands) {
-      for (const Band& band : axialBands(ctx, q, ctx.options.snapToPlanes ? planes : noPlanes)) {
+      for (const Band& band : axialBands(ctx, q, snapPlanes)) {
         out.push_back(makeCandidate(CsgTree::leaf(band.primitive), CandidateOrigin::Quadric,
                                     {index}, static_cast<double>(band.inliers)));
         ++stats.axialBands;
@@ -560,8 +557,7 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
       double start = 0.0, coverage = 0.0;
       angularSpan(q, start, coverage);
       if (std::abs(coverage - 0.5 * kPi) <= ctx.options.quarterTolerance * kPi / 180.0) {
-        box = quarterBox(ctx, q, cyl->radius, start, coverage,
-                         ctx.options.snapToPlanes ? planes : noPlanes);
+        box = quarterBox(ctx, q, cyl->radius, start, coverage, snapPlanes);
         ++stats.quarterCylinders;
       }
     }

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -385,76 +386,15 @@ TEST(Hypotheses, CylinderEndsLeaveTheSparseNoiseTailsOfTheirNeighbours) {
   EXPECT_NEAR(shankTop(surfaces), 4.5, 1e-9);
 }
 
-// A boss (radius 3, z = 0.25 to 2.75) with a groove (radius 2.5, z = 1.75
-// to 2.25) on a base plate: the detection takes the boss's side above and
-// below the groove as one cylinder, which bounded by its inliers fills the
-// groove. Each band it leaves is a candidate too, its ends on the groove's
-// walls; the whole cylinder stays. With noise the bands' edges spread into
-// the gap (at 0.5 % of D, σ = 0.07, three deviations from each side close
-// all but 0.08 of the 0.5 gap, under twice the duplicate tolerance); at
-// 0.25 % the gap stays open.
-TEST(Hypotheses, AGroovedCylinderAlsoGivesOneCylinderPerBand) {
-  const CsgTree tree = CsgTree::unite({
-      CsgTree::leaf(Box{Vec3(0, 0, -0.5), Mat3::Identity(), Vec3(5, 5, 0.75)}),  // top z = 0.25
-      CsgTree::leaf(Cylinder{Vec3(0, 0, 1.0), Vec3::UnitZ(), 3.0, 1.5}),         // z 0.25..1.75
-      CsgTree::leaf(Cylinder{Vec3(0, 0, 2.0), Vec3::UnitZ(), 2.5, 0.5}),         // z 1.75..2.25
-      CsgTree::leaf(Cylinder{Vec3(0, 0, 2.5), Vec3::UnitZ(), 3.0, 0.5}),         // z 2.25..2.75
-  });
-  for (const double noise : {0.0, 0.5 * kNoise}) {
-    SCOPED_TRACE(noise);
-    const GroundTruth gt = makeGroundTruth(tree, 40000, noise, 5);
-    const int lower = surfaceOf(gt, 1, 0), upper = surfaceOf(gt, 3, 0);
-    ASSERT_GE(lower, 0);
-    ASSERT_GE(upper, 0);
-    // The detection's view: one cylinder with the inliers of both bands.
-    std::vector<Surface> surfaces;
-    for (std::size_t s = 0; s < gt.surfaces.size(); ++s) {
-      if (int(s) == upper) continue;
-      surfaces.push_back(gt.surfaces[s]);
-      if (int(s) == lower) {
-        auto& in = surfaces.back().inliers;
-        const auto& more = gt.surfaces[std::size_t(upper)].inliers;
-        in.insert(in.end(), more.begin(), more.end());
-      }
-    }
-    const auto radius3 = [](const HypothesisSet& set) {
-      std::vector<std::pair<double, double>> spans;  // z ranges of the radius-3 cylinders
-      for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
-        const Cylinder* k = c->tree.root()->primitive.as<Cylinder>();
-        if (k == nullptr || std::abs(k->radius - 3.0) > 0.05) continue;
-        const double half = 0.5 * k->height * std::abs(k->axis.z());
-        spans.emplace_back(k->center.z() - half, k->center.z() + half);
-      }
-      std::sort(spans.begin(), spans.end());
-      return spans;
-    };
-    const HypothesisSet set = generateHypotheses(gt.scan, surfaces);
-    const auto spans = radius3(set);
-    ASSERT_EQ(spans.size(), 3u);
-    EXPECT_EQ(set.stats.axialBands, 2u);
-    // Whole, lower band, upper band: every end on its fitted plane.
-    const double tol = noise > 0.0 ? 0.02 : 1e-9;
-    EXPECT_NEAR(spans[0].first, 0.25, tol);
-    EXPECT_NEAR(spans[0].second, 1.75, tol);
-    EXPECT_NEAR(spans[1].first, 0.25, tol);
-    EXPECT_NEAR(spans[1].second, 2.75, tol);
-    EXPECT_NEAR(spans[2].first, 2.25, tol);
-    EXPECT_NEAR(spans[2].second, 2.75, tol);
-
-    HypothesisOptions off;
-    off.axialBands = false;
-    EXPECT_EQ(radius3(generateHypotheses(gt.scan, surfaces, off)).size(), 1u);
-  }
-}
-
 // A boss of radius 3 on a base, ringed by `grooves` grooves (radius 2.5) 0.5
-// wide between bands 0.5 tall from z = 0.25, and the detection's view: the
-// bands' sides as one cylinder surface. `rms` is that surface's residual.
+// wide between bands 0.5 tall from z = 0.25, scanned with `noise`, and the
+// detection's view: the bands' sides as one cylinder surface, with residual
+// `rms` when given (else the lowest band's own).
 struct RingedBoss {
   GroundTruth gt;
   std::vector<Surface> surfaces;
 };
-RingedBoss ringedBoss(int grooves, double rms) {
+RingedBoss ringedBoss(int grooves, double noise = 0.0, std::optional<double> rms = {}) {
   std::vector<CsgTree> parts{
       CsgTree::leaf(Box{Vec3(0, 0, -0.5), Mat3::Identity(), Vec3(5, 5, 0.75)}),  // top z = 0.25
       CsgTree::leaf(Cylinder{Vec3(0, 0, 0.25 + 0.5 * grooves + 0.25), Vec3::UnitZ(), 2.5,
@@ -463,7 +403,7 @@ RingedBoss ringedBoss(int grooves, double rms) {
   for (int b = 0; b <= grooves; ++b) {
     parts.push_back(CsgTree::leaf(Cylinder{Vec3(0, 0, 0.5 + 1.0 * b), Vec3::UnitZ(), 3.0, 0.5}));
   }
-  RingedBoss out{makeGroundTruth(CsgTree::unite(parts), 40000, 0.0, 5), {}};
+  RingedBoss out{makeGroundTruth(CsgTree::unite(parts), 40000, noise, 5), {}};
   std::vector<int> sides;
   for (int b = 0; b <= grooves; ++b) sides.push_back(surfaceOf(out.gt, 2 + b, 0));
   if (std::find(sides.begin(), sides.end(), -1) != sides.end()) {
@@ -479,9 +419,52 @@ RingedBoss ringedBoss(int grooves, double rms) {
       out.surfaces.back().inliers.insert(out.surfaces.back().inliers.end(), more.begin(),
                                          more.end());
     }
-    out.surfaces.back().rms = rms;
+    if (rms) out.surfaces.back().rms = *rms;
   }
   return out;
+}
+
+// The z ranges of the radius-3 cylinders among the candidates, in order.
+std::vector<std::pair<double, double>> radius3Spans(const HypothesisSet& set) {
+  std::vector<std::pair<double, double>> spans;
+  for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
+    const Cylinder* k = c->tree.root()->primitive.as<Cylinder>();
+    if (k == nullptr || std::abs(k->radius - 3.0) > 0.05) continue;
+    const double half = 0.5 * k->height * std::abs(k->axis.z());
+    spans.emplace_back(k->center.z() - half, k->center.z() + half);
+  }
+  std::sort(spans.begin(), spans.end());
+  return spans;
+}
+
+// A boss with a groove (z 0.75 to 1.25) on a base plate: the detection
+// takes the boss's side below and above the groove as one cylinder, which
+// bounded by its inliers fills the groove. Each band it leaves is a
+// candidate too, its ends on the groove's walls; the whole cylinder stays.
+// With noise the bands' edges spread into the gap (at 0.5 % of D, σ = 0.07,
+// three deviations from each side close all but 0.08 of the 0.5 gap, under
+// twice the duplicate tolerance); at 0.25 % the gap stays open.
+TEST(Hypotheses, AGroovedCylinderAlsoGivesOneCylinderPerBand) {
+  for (const double noise : {0.0, 0.5 * kNoise}) {
+    SCOPED_TRACE(noise);
+    const RingedBoss boss = ringedBoss(1, noise);
+    const HypothesisSet set = generateHypotheses(boss.gt.scan, boss.surfaces);
+    const auto spans = radius3Spans(set);
+    ASSERT_EQ(spans.size(), 3u);
+    EXPECT_EQ(set.stats.axialBands, 2u);
+    // Lower band, whole, upper band: every end on its fitted plane.
+    const double tol = noise > 0.0 ? 0.02 : 1e-9;
+    EXPECT_NEAR(spans[0].first, 0.25, tol);
+    EXPECT_NEAR(spans[0].second, 0.75, tol);
+    EXPECT_NEAR(spans[1].first, 0.25, tol);
+    EXPECT_NEAR(spans[1].second, 1.75, tol);
+    EXPECT_NEAR(spans[2].first, 1.25, tol);
+    EXPECT_NEAR(spans[2].second, 1.75, tol);
+
+    HypothesisOptions off;
+    off.axialBands = false;
+    EXPECT_EQ(radius3Spans(generateHypotheses(boss.gt.scan, boss.surfaces, off)).size(), 1u);
+  }
 }
 
 // A gap between bands must be wider than six deviations of the patch's noise
@@ -493,18 +476,12 @@ TEST(Hypotheses, BandsNeedGapsWiderThanTheNoiseAndAreFew) {
   // Radius-3 cylinders among the candidates: the whole patch and its bands
   // (the core's side, seen in the grooves, is split too, at radius 2.5).
   const auto radius3 = [](const RingedBoss& boss) {
-    const HypothesisSet set = generateHypotheses(boss.gt.scan, boss.surfaces);
-    std::size_t n = 0;
-    for (const Candidate* c : ofOrigin(set, CandidateOrigin::Quadric)) {
-      const Cylinder* k = c->tree.root()->primitive.as<Cylinder>();
-      n += k != nullptr && std::abs(k->radius - 3.0) < 0.05;
-    }
-    return n;
+    return radius3Spans(generateHypotheses(boss.gt.scan, boss.surfaces)).size();
   };
-  EXPECT_EQ(radius3(ringedBoss(1, 0.07)), 1u + 2u);
-  EXPECT_EQ(radius3(ringedBoss(1, 0.1)), 1u);
-  EXPECT_EQ(radius3(ringedBoss(3, 0.0)), 1u + 4u);
-  EXPECT_EQ(radius3(ringedBoss(4, 0.0)), 1u);
+  EXPECT_EQ(radius3(ringedBoss(1, 0.0, 0.07)), 1u + 2u);
+  EXPECT_EQ(radius3(ringedBoss(1, 0.0, 0.1)), 1u);
+  EXPECT_EQ(radius3(ringedBoss(3, 0.0, 0.0)), 1u + 4u);
+  EXPECT_EQ(radius3(ringedBoss(4, 0.0, 0.0)), 1u);
 }
 
 // A shaft with a cross hole: the hole interrupts the side over part of the

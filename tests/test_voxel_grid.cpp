@@ -42,7 +42,7 @@ TEST(VoxelGrid, ASideOfWholeVoxelsPlusRoundingGetsNoExtraVoxel) {
   box.center = Vec3(0, 0, 0);
   box.axes = Mat3::Identity();
   // 60 x 60 x 33 voxels of size 1/6 (10 x 10 x 5.5), the last side 3e-4
-  // voxels long: a frame tilted by 5e-6 rad around points 10 wide.
+  // voxels longer: a frame tilted by 5e-6 rad around points 10 wide.
   box.halfSize = Vec3(5, 5, 2.75 + 0.5 * 5e-5);
   const VoxelGrid grid = VoxelGrid::around(box, GridOptions{64, 2});
   EXPECT_NEAR(grid.voxelSize(), 1.0 / 6.0, 1e-12);
