@@ -20,7 +20,7 @@
 #include <map>
 #include <thread>
 
-#include "app/job.h"
+#include "app/job_options.h"
 #include "io/batch_summary.h"
 #include "io/errors.h"
 

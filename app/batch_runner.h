@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "app/batch_inputs.h"
-#include "app/console.h"
+#include "job/console.h"
 
 namespace csgvox::app {
 

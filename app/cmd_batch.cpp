@@ -11,10 +11,10 @@
 #include "app/batch_inputs.h"
 #include "app/batch_runner.h"
 #include "app/commands.h"
-#include "app/console.h"
-#include "app/job.h"
+#include "app/job_options.h"
 #include "app/options.h"
 #include "io/errors.h"
+#include "job/console.h"
 
 namespace csgvox::app {
 
@@ -30,7 +30,7 @@ struct CommandOptions {
   int task = 0;
   int jobs = 0;
   bool resume = false;
-  JobSettings job;
+  JobOptions job;
 };
 
 // The main-job options given on the command line, as words for the jobs.

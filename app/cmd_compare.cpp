@@ -7,12 +7,12 @@
 #include <sstream>
 
 #include "app/commands.h"
-#include "app/console.h"
-#include "app/job.h"
+#include "app/job_options.h"
 #include "app/options.h"
 #include "io/errors.h"
 #include "io/gp_files.h"
 #include "io/report.h"
+#include "job/console.h"
 #include "pipeline/detect_and_fit.h"
 #include "voxel/labeling.h"
 
@@ -106,7 +106,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     const std::vector<std::string> methods = splitMethods(opt->methods);
     const fs::path scanPath(opt->scan);
     ReadOptions ro;
-    ro.seed = opt->job.seed;
+    ro.seed = opt->job.reconstruct.seed;
     const Scan scan = readScan(scanPath, ro);
     console.info("read " + scanPath.string() + ": " + describeScan(scan));
     const fs::path folder = opt->outDir.empty()
@@ -122,7 +122,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     }
     OutputSet summary(folder, {"compare.json"}, inputs);
 
-    const ReconstructOptions base = pipelineOptions(opt->job);
+    const ReconstructOptions& base = opt->job.reconstruct;
     Stopwatch watch;
     DetectAndFitOptions fo;
     fo.resolution = base.resolution;
@@ -139,9 +139,9 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     nlohmann::ordered_json rows = nlohmann::ordered_json::array();
     VoxelLabels labels;
     for (const std::string& name : methods) {
-      JobSettings settings = opt->job;
-      settings.method = name;
-      ReconstructOptions options = pipelineOptions(settings);
+      JobOptions settings = opt->job;
+      settings.reconstruct.method = methodFromName(name);
+      const ReconstructOptions& options = settings.reconstruct;
       console.info("method " + name);
       const Stopwatch wall;
       const double cpu0 = cpuSeconds();
@@ -150,7 +150,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
           [&](std::string_view stage, bool done, const std::string& text) {
             if (done) console.info("  " + std::string(stage) + ": " + text);
           },
-          console.progress());
+          RunControl(settings.timeLimit, console.progress()));
       const double wallSeconds = wall.seconds(), cpu = cpuSeconds() - cpu0;
       if (!rec.ok()) throw ParseError(scanPath.string() + ": " + name + ": " + rec.message);
       labels = rec.labels;
@@ -163,18 +163,20 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     if (!opt->importGp.empty()) {
       GpImportOptions io;
       io.box = gpScanClipBox(scan.cloud.bounds());
-      Reconstruction rec;
-      rec.tree = importGp(opt->importGp[0], opt->importGp[1], io).tree;
-      rec.method = Method::Imported;
-      rec.detection = found.detection;
-      rec.grid = found.grid;
+      const CsgTree tree = importGp(opt->importGp[0], opt->importGp[1], io).tree;
       LabelOptions lo = base.labels;
       lo.noise = found.detection.noise;
-      rec.labels = methods.empty() ? labelVoxels(found.grid, scan.cloud, lo) : labels;
-      rec.voxels = solidVoxels(rec.tree, rec.grid);
+      if (methods.empty()) labels = labelVoxels(found.grid, scan.cloud, lo);
+      const VoxelSet voxels = solidVoxels(tree, found.grid);
+      const double voxelIou = VoxelSet::iou(voxels, labels.inside);
+      ImportedTree imported;
+      imported.tree = &tree;
+      imported.grid = &found.grid;
+      imported.resolution = found.resolution;
+      imported.surfaces = found.detection.surfaces.size();
       OutputSet output(folder / "import-gp", jobFiles(), inputs);
       const nlohmann::ordered_json report =
-          writeJob(output, scanPath, scan, rec, opt->job, {}, console);
+          writeImportedJob(output, scanPath, scan, imported, voxelIou, opt->job, console);
       output.commit();
       rows.push_back(row("import-gp", 0.0, 0.0, report));
     }

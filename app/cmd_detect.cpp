@@ -5,13 +5,13 @@
 #include <filesystem>
 
 #include "app/commands.h"
-#include "app/console.h"
 #include "app/options.h"
 #include "io/errors.h"
 #include "io/output_set.h"
 #include "io/point_writer.h"
 #include "io/report.h"
 #include "io/scan_reader.h"
+#include "job/console.h"
 #include "pipeline/detect_and_fit.h"
 
 namespace csgvox::app {
@@ -109,7 +109,7 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
     const DetectionResult& det = found.detection;
     console.info("detection: " + det.message);
     if (!found.ok()) throw ParseError(scanPath.string() + ": " + det.message);
-    console.info("refined and regularised " + std::to_string(det.surfaces.size()) +
+    console.info("surface fit and regularisation: " + std::to_string(det.surfaces.size()) +
                  " surfaces: " + found.regularization.summary());
     console.info("hypotheses: " + std::to_string(found.hypotheses.candidates.size()) +
                  " candidates");
@@ -124,7 +124,7 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
 
     char buf[256];
     std::snprintf(buf, sizeof(buf),
-                  "read %.2f s, detection %.2f s, refinement %.2f s, regularisation %.3f s, "
+                  "read %.2f s, detection %.2f s, surface fit %.2f s, regularisation %.3f s, "
                   "hypotheses %.2f s, total %.2f s",
                   readSeconds, found.detectSeconds, found.refineSeconds, found.regularizeSeconds,
                   found.hypothesisSeconds, total.seconds());

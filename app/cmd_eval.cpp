@@ -4,12 +4,12 @@
 #include <iostream>
 
 #include "app/commands.h"
-#include "app/console.h"
 #include "app/options.h"
 #include "core/solid_sampling.h"
 #include "io/report.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
+#include "job/console.h"
 #include "mesh/fit_metrics.h"
 
 namespace csgvox::app {

@@ -5,7 +5,6 @@
 #include <map>
 
 #include "app/commands.h"
-#include "app/console.h"
 #include "io/file_util.h"
 #include "io/gp_files.h"
 #include "io/output_set.h"
@@ -14,6 +13,7 @@
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
+#include "job/console.h"
 
 namespace csgvox::app {
 

@@ -7,8 +7,7 @@
 #include <optional>
 
 #include "app/commands.h"
-#include "app/console.h"
-#include "app/job.h"
+#include "app/job_options.h"
 #include "app/options.h"
 #include "io/errors.h"
 #include "io/mesh_files.h"
@@ -18,6 +17,7 @@
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
+#include "job/console.h"
 #include "mesh/fit_metrics.h"
 #include "mesh/mesh_export.h"
 #include "pipeline/reconstruct.h"
@@ -43,7 +43,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     nlohmann::ordered_json timings;
     Stopwatch watch;
     ReadOptions ro;
-    ro.seed = opt->job.seed;
+    ro.seed = opt->job.reconstruct.seed;
     const Scan scan = readScan(scanPath, ro);
     timings["read"] = watch.seconds();
     console.info("read " + scanPath.string() + ": " + describeScan(scan));
@@ -56,11 +56,11 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                      jobFiles(), inputs);
 
     const Reconstruction rec = reconstruct(
-        scan.cloud, pipelineOptions(opt->job),
+        scan.cloud, opt->job.reconstruct,
         [&](std::string_view stage, bool done, const std::string& summary) {
           if (done) console.info(std::string(stage) + ": " + summary);
         },
-        console.progress());
+        RunControl(opt->job.timeLimit, console.progress()));
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
     if (rec.timeLimitHit) {

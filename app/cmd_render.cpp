@@ -4,7 +4,6 @@
 #include <optional>
 
 #include "app/commands.h"
-#include "app/console.h"
 #include "app/options.h"
 #include "app/tree_command.h"
 #include "cad/step_export.h"
@@ -17,6 +16,7 @@
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
+#include "job/console.h"
 #include "mesh/mesh_export.h"
 #include "render/preview.h"
 
@@ -59,7 +59,7 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
     if (ext == "ply" || ext == "stl" || ext == "obj") {
       MeshOptions mo;
       mo.resolution = opt->resolution;
-      const TriangleMesh mesh = meshTree(tree, mo, console.progress());
+      const TriangleMesh mesh = meshTree(tree, mo, RunControl(0.0, console.progress()));
       char buf[256];
       std::snprintf(buf, sizeof(buf), "meshed at res %d: %zu vertices, %zu triangles in %.2f s",
                     opt->resolution, mesh.vertices.size(), mesh.triangles.size(), watch.seconds());
@@ -89,7 +89,7 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
       }
       MeshOptions mo;
       mo.resolution = opt->resolution;
-      const TriangleMesh mesh = meshTree(tree, mo, console.progress());
+      const TriangleMesh mesh = meshTree(tree, mo, RunControl(0.0, console.progress()));
       PreviewOptions po;
       po.panelSize = opt->panelSize;
       writePng(std::filesystem::path(opt->output),

@@ -3,11 +3,11 @@
 #include <cstdio>
 
 #include "app/commands.h"
-#include "app/console.h"
 #include "app/options.h"
 #include "app/tree_command.h"
 #include "io/errors.h"
 #include "io/point_writer.h"
+#include "job/console.h"
 #include "mesh/surface_sampler.h"
 
 namespace csgvox::app {

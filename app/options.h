@@ -8,7 +8,12 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <span>
 #include <string>
+#include <type_traits>
+#include <vector>
+
+#include "core/named_values.h"
 
 namespace csgvox::app {
 
@@ -28,6 +33,29 @@ inline CLI::Validator inRange(double lo, double hi) {
         return {};
       },
       "in " + range);
+}
+
+/// A finite number in the option's range.
+inline CLI::Validator inRange(const OptionRange& range) { return inRange(range.lo, range.hi); }
+
+/// An option whose value is one of the names of `table`, stored as the enum
+/// value it names; --help lists the names and shows the current value's
+/// name as the default. The text given stays as typed (batch passes it on).
+template <class E>
+CLI::Option* addNamedOption(CLI::App& app, const std::string& flags, E& target,
+                            std::type_identity_t<std::span<const NamedValue<E>>> table,
+                            const std::string& help) {
+  std::vector<std::string> names;
+  for (const NamedValue<E>& entry : table) names.emplace_back(entry.name);
+  return app
+      .add_option_function<std::string>(
+          flags,
+          [&target, table](const std::string& name) {
+            target = valueNamed<E>(table, name, "value");
+          },
+          help)
+      ->check(CLI::IsMember(names))
+      ->default_str(std::string(nameOf<E>(table, target)));
 }
 
 /// A non-negative integer (for seeds and counts held unsigned).

@@ -16,7 +16,7 @@
 //   --method      hybrid (default), voxel or gp
 //   --models      comma-separated model names (default: all of the CSV)
 //   --samples     random points of the IoU estimate (default 200000)
-//   --time-limit  ReconstructOptions::timeLimit in seconds (default 0: none);
+//   --time-limit  the reconstruction's RunControl deadline in seconds (default 0: none);
 //                 a model whose process runs past 3 T + 60 s is killed
 //   --no-unsupported-regions  the hybrid searches only where points are
 //                 badly explained (HybridOptions::unsupportedRegions off)
@@ -218,10 +218,9 @@ Result runModel(const Options& opt, const std::string& model) {
     if (opt.refineStall > 0) ro.hybrid.evolve.stallGenerations = opt.refineStall;
     ro.finish.enabled = opt.finish;
     ro.seed = opt.seed;
-    ro.timeLimit = opt.timeLimit;
     ro.method = opt.method;
     const auto t0 = std::chrono::steady_clock::now();
-    const Reconstruction rec = reconstruct(scan, ro);
+    const Reconstruction rec = reconstruct(scan, ro, {}, RunControl(opt.timeLimit));
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.status = statusName(rec.status);
     res.note = rec.message;

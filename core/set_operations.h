@@ -7,10 +7,12 @@
 /// SardfValues) give the same values as the implementations, bit for bit,
 /// without gradients.
 
+#include <array>
 #include <cmath>
 #include <string_view>
 
 #include "core/geometry.h"
+#include "core/named_values.h"
 #include "core/sardf.h"
 
 namespace csgvox {
@@ -24,6 +26,13 @@ struct FieldValue {
 /// Which implementation of the set operations to use. Sardf also needs a
 /// radius: it is always a SardfOperations object.
 enum class SetOperationKind { MinMax, RFunction, Sardf };
+
+/// The names users give the set operations ("minmax", "rfunction", "sardf").
+inline constexpr std::array<NamedValue<SetOperationKind>, 3> kSetOperationNames = {{
+    {"minmax", SetOperationKind::MinMax},
+    {"rfunction", SetOperationKind::RFunction},
+    {"sardf", SetOperationKind::Sardf},
+}};
 
 /// The binary set operations on FRep values (f >= 0 inside). Complement is
 /// always -f and difference is a ∩ ¬b.

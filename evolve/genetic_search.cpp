@@ -151,7 +151,11 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
   std::vector<Creature> next;
   next.reserve(options.population);
   for (std::size_t generation = 1; generation <= options.maxGenerations; ++generation) {
-    if (options.timeLimit > 0.0 && elapsed() > options.timeLimit) {
+    if (options.control.cancelled()) {
+      result.stop = EvolveStop::Cancelled;
+      break;
+    }
+    if (options.control.pastDeadline()) {
       result.stop = EvolveStop::TimeLimit;
       break;
     }

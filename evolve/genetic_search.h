@@ -17,6 +17,7 @@
 #include <span>
 
 #include "core/csg_tree.h"
+#include "core/run_control.h"
 #include "evolve/fitness.h"
 #include "evolve/tree_variation.h"
 
@@ -31,11 +32,11 @@ struct EvolveOptions {
   double mutationRate = 0.3;           ///< ... from mutation with this one (else a plain copy)
   std::size_t maxGenerations = 3000;   ///< generations at most
   std::size_t stallGenerations = 300;  ///< stop after this many without improvement (0: never)
-  double timeLimit = 0.0;              ///< seconds (0: none); the best tree so far is kept
-  std::uint64_t seed = 1;              ///< seeds every random choice
-  VariationOptions variation;          ///< random trees, crossover depth bound, mutations
-  bool normalizeOffspring = false;     ///< pass every offspring through normalizeTree (no X − X:
-                                       ///< surfaces that bound no volume cannot explain points)
+  RunControl control;               ///< deadline (the best tree so far is kept) and cancel request
+  std::uint64_t seed = 1;           ///< seeds every random choice
+  VariationOptions variation;       ///< random trees, crossover depth bound, mutations
+  bool normalizeOffspring = false;  ///< pass every offspring through normalizeTree (no X − X:
+                                    ///< surfaces that bound no volume cannot explain points)
 };
 
 /// What one generation reached, for progress reports.

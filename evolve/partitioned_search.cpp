@@ -72,9 +72,10 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
   partFitness.voxelWeight = 0.0;
   // The partitions share half the time limit: each one starts with what is
   // left of it (they run a few at a time).
-  const Clock::time_point partDeadline =
-      start + std::chrono::duration_cast<Clock::duration>(
-                  std::chrono::duration<double>(0.5 * evolveOptions.timeLimit));
+  const RunControl& control = evolveOptions.control;
+  const RunControl partControl = control.deadline() == Clock::time_point::max()
+                                     ? control
+                                     : control.until(start + (control.deadline() - start) / 2);
   std::vector<CsgTree> trees(partitions.size());
   out.partitions.resize(partitions.size());
   tbb::parallel_for(std::size_t{0}, partitions.size(), [&](std::size_t k) {
@@ -87,10 +88,7 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
     }
     const PrimitiveLibrary sub(std::move(primitives), std::move(names));
     EvolveOptions eo = evolveOptions;
-    if (evolveOptions.timeLimit > 0.0) {
-      eo.timeLimit =
-          std::max(std::chrono::duration<double>(partDeadline - Clock::now()).count(), 1e-3);
-    }
+    eo.control = partControl;
     eo.seed = mixSeed(evolveOptions.seed, k);
     eo.variation.maxDepth = heightBound(part.primitives.size(), evolveOptions.variation.maxDepth);
     eo.variation.initialDepth = std::min(eo.variation.initialDepth, eo.variation.maxDepth);
@@ -113,8 +111,7 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
 
   const Clock::time_point finalStart = Clock::now();
   if (options.finalSearch || merged.empty()) {
-    EvolveOptions eo = evolveOptions;
-    if (eo.timeLimit > 0.0) eo.timeLimit = std::max(eo.timeLimit - secondsSince(start), 1e-3);
+    const EvolveOptions& eo = evolveOptions;
     std::vector<CsgTree> seeds;
     if (!merged.empty()) seeds.push_back(merged);
     seeds.insert(seeds.end(), trees.begin(), trees.end());

@@ -74,7 +74,7 @@ struct Lattice {
 // thread (one call at a time); remembers a request to stop.
 class Progress {
  public:
-  explicit Progress(const ProgressCallback& callback) : callback_(callback) {}
+  explicit Progress(const RunControl& control) : control_(control) {}
   void stage(std::string_view name, std::size_t total) {
     stage_ = name;
     total_ = std::max<std::size_t>(total, 1);
@@ -83,12 +83,11 @@ class Progress {
   }
   // Counts `n` more items of the stage done.
   void advance(std::size_t n) {
-    if (!callback_) return;
     const std::size_t before = done_.fetch_add(n);
     const std::size_t step = std::max<std::size_t>(total_ / 100, 1);
     if ((before + n) / step != before / step) report(double(before + n) / double(total_));
   }
-  bool stopped() const { return stopped_.load(std::memory_order_relaxed); }
+  bool stopped() const { return control_.cancelled(); }
   // @throw std::runtime_error when the callback asked to stop.
   void check() const {
     if (stopped()) throw std::runtime_error("meshTree: cancelled");
@@ -96,16 +95,14 @@ class Progress {
 
  private:
   void report(double fraction) {
-    if (!callback_) return;
     const std::lock_guard<std::mutex> lock(mutex_);
-    if (!callback_(std::min(fraction, 1.0), stage_)) stopped_ = true;
+    control_.report(std::min(fraction, 1.0), stage_);
   }
 
-  const ProgressCallback& callback_;
+  const RunControl& control_;
   std::string_view stage_;
   std::size_t total_ = 1;
   std::atomic<std::size_t> done_{0};
-  std::atomic<bool> stopped_{false};
   std::mutex mutex_;
 };
 
@@ -520,11 +517,10 @@ void addTriangle(TriangleMesh& mesh, std::uint32_t a, std::uint32_t b, std::uint
 
 }  // namespace
 
-TriangleMesh meshTree(const CsgTree& tree, const MeshOptions& options,
-                      const ProgressCallback& progressCallback) {
+TriangleMesh meshTree(const CsgTree& tree, const MeshOptions& options, const RunControl& control) {
   validate(tree, options);
   openvdb::initialize();
-  Progress progress(progressCallback);
+  Progress progress(control);
 
   const Aabb bounds = tree.bounds();
   Lattice lattice;

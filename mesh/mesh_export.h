@@ -4,7 +4,7 @@
 /// polygonised with OpenVDB.
 
 #include "core/csg_tree.h"
-#include "core/progress.h"
+#include "core/run_control.h"
 #include "core/triangle_mesh.h"
 
 namespace csgvox {
@@ -31,17 +31,17 @@ struct MeshOptions {
 /// the surface (the tree is pruned over a hierarchy of lattice blocks), so
 /// trees with many leaves mesh in about the time of their surface. The result
 /// is the same as evaluating the whole tree everywhere.
-/// Runs in parallel (TBB). `progress`, when set, hears the stages "cull",
-/// "sample", "polygonise" and "sharpen" (from worker threads, one call at a
-/// time); returning false stops the meshing.
+/// Runs in parallel (TBB). `control`'s progress callback hears the stages
+/// "cull", "sample", "polygonise" and "sharpen" (from worker threads, one
+/// call at a time); a cancel request stops the meshing (it has no deadline).
 /// @throw std::invalid_argument when the tree is empty or invalid, its bounds
 ///        are empty or unbounded (e.g. a bare half-space or a complement),
 ///        a primitive is too large to mesh (coordinates beyond 1e30) or the
 ///        solid too small for the resolution (voxels below 1.5e-5; the message
 ///        names the primitive), `resolution` is outside [8, 2048],
 ///        `adaptivity` outside [0, 1], or the estimated memory exceeds
-///        `memoryLimitMiB`; std::runtime_error when `progress` asked to stop.
+///        `memoryLimitMiB`; std::runtime_error when `control` was cancelled.
 TriangleMesh meshTree(const CsgTree& tree, const MeshOptions& options = {},
-                      const ProgressCallback& progress = {});
+                      const RunControl& control = {});
 
 }  // namespace csgvox

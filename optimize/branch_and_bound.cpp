@@ -28,7 +28,7 @@ class BranchAndBound {
         n_(classes.itemCount()),
         boundChannel_(boundChannel),
         budget_(options.nodeBudget),
-        deadline_(options.deadline),
+        control_(options.control),
         classWords_((classes.size() + 63) / 64),
         united_(classWords_, 0),
         itemBits_(n_ * classWords_, 0),
@@ -79,9 +79,9 @@ class BranchAndBound {
   void search(std::size_t t, std::size_t chosen, std::size_t coveredOut,
               std::vector<std::uint8_t>& current) {
     if (++nodes_ > budget_) return;
-    // The clock is read every 1024 nodes; past the deadline the search ends
-    // as if the budget were spent.
-    if ((nodes_ & 1023) == 0 && std::chrono::steady_clock::now() > deadline_) {
+    // The clock is read every 1024 nodes; past the deadline (or once
+    // cancelled) the search ends as if the budget were spent.
+    if ((nodes_ & 1023) == 0 && control_.shouldStop()) {
       budget_ = nodes_ - 1;
       return;
     }
@@ -132,7 +132,7 @@ class BranchAndBound {
   std::size_t n_;
   std::size_t boundChannel_;
   std::uint64_t budget_;
-  std::chrono::steady_clock::time_point deadline_;
+  RunControl control_;
   std::uint64_t nodes_ = 0;
   std::size_t classWords_;                // 64-bit words of a bitset over the classes
   std::vector<std::uint64_t> united_;     // classes the current selection holds

@@ -20,6 +20,7 @@
 #include <span>
 #include <vector>
 
+#include "core/run_control.h"
 #include "voxel/voxel_set.h"
 
 namespace csgvox {
@@ -90,13 +91,13 @@ struct SelectionOptions {
   int restarts = 3;                   ///< perturbed restarts of the greedy descent
   std::uint64_t seed = 1;             ///< seeds the restarts' perturbations
   std::uint64_t nodeBudget = 20'000;  ///< branch-and-bound nodes before keeping the incumbent
-  /// Wall clock at which branch and bound stops and keeps its best solution
-  /// so far. Default: never.
-  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  /// Its deadline or a cancel request stops branch and bound, which keeps
+  /// its best solution so far. Default: never.
+  RunControl control;
 };
 
 /// The options of a phase's search from the phase's own options (any struct
-/// with a run `seed`, a `nodeBudget` and a `deadline`): `restarts` restarts
+/// with a run `seed`, a `nodeBudget` and a `control`): `restarts` restarts
 /// seeded by the phase's stream `stream` of the run seed (streamSeed).
 template <class PhaseOptions>
 SelectionOptions phaseSearch(const PhaseOptions& phase, int restarts, std::uint64_t stream);
@@ -109,7 +110,7 @@ struct Selection {
 };
 
 /// The selection of `problem`'s items minimising `objective`: exact unless
-/// the node budget or the deadline stops branch and bound first (then the
+/// the node budget, the deadline or a cancel request stops branch and bound first (then the
 /// best found, provedOptimal false). Deterministic for a given seed.
 Selection solveSelection(const SelectionProblem& problem, const SelectionObjective& objective,
                          const SelectionOptions& options = {});
@@ -132,7 +133,7 @@ SelectionOptions phaseSearch(const PhaseOptions& phase, int restarts, std::uint6
   return {.restarts = restarts,
           .seed = streamSeed(phase.seed, stream),
           .nodeBudget = phase.nodeBudget,
-          .deadline = phase.deadline};
+          .control = phase.control};
 }
 
 }  // namespace csgvox

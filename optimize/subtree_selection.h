@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/run_control.h"
 #include "voxel/voxel_set.h"
 
 namespace csgvox {
@@ -32,9 +33,9 @@ struct SubtreeOptions {
   /// (its result matters only when the budget or the deadline stops branch
   /// and bound). The run's seed; 1 is the default run.
   std::uint64_t seed = 1;
-  /// Wall clock at which branch and bound stops and keeps its best solution
-  /// so far (provedOptimal is then false). Default: never.
-  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  /// Its deadline stops branch and bound, which keeps its best solution so
+  /// far (provedOptimal is then false); so does a cancel request. Default: never.
+  RunControl control;
 };
 
 /// Result of selectSubtree.

@@ -17,9 +17,7 @@ Fitness fitnessOf(const PointCloud& scan, const CsgTree& tree, const FitnessOpti
 }
 
 double voxelIou(const CsgTree& tree, const VoxelTarget& voxels) {
-  const VoxelSet solid = solidVoxels(tree, voxels.grid);
-  const std::size_t either = VoxelSet::countOr(solid, voxels.inside);
-  return either == 0 ? 1.0 : double(VoxelSet::countAnd(solid, voxels.inside)) / double(either);
+  return VoxelSet::iou(solidVoxels(tree, voxels.grid), voxels.inside);
 }
 
 }  // namespace

@@ -241,7 +241,7 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
                           const std::vector<CsgTree>& members,
                           std::span<const Candidate> candidates, const VoxelGrid& grid,
                           const VoxelSet& inside, const HybridOptions& options, std::uint64_t seed,
-                          double timeLimit) {
+                          const RunControl& control) {
   const Clock::time_point start = Clock::now();
   const double diagonal = scan.diagonal();
   const double tolerance = options.fitness.distanceTolerance * diagonal;
@@ -343,7 +343,7 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   }
   EvolveOptions eo = options.evolve;
   eo.seed = seed;
-  eo.timeLimit = timeLimit;
+  eo.control = control;
   eo.variation.maxDepth = std::max(eo.variation.maxDepth, subtree.depth() + 3);
   const EvolveResult r = evolve(model, seeds, eo, {}, rough ? &*rough : nullptr);
   out.refined = r.best;
@@ -383,11 +383,11 @@ const char* regionVerdictName(RegionVerdict verdict) {
 
 HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
                         std::span<const Candidate> candidates, const VoxelGrid& grid,
-                        const VoxelSet& inside, const HybridOptions& options, double timeLimit) {
+                        const VoxelSet& inside, const HybridOptions& options,
+                        const RunControl& control) {
   if (!scan.hasNormals())
     throw std::invalid_argument("the hybrid method needs a scan with normals");
   if (tree.empty()) throw std::invalid_argument("the hybrid method needs a tree to refine");
-  const Clock::time_point start = Clock::now();
   const double diagonal = scan.diagonal();
   const double voxel = grid.voxelSize();
   HybridResult out;
@@ -470,12 +470,11 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   // with the best fitness on its points (the first of equals).
   const std::size_t searches = std::max<std::size_t>(options.searches, 1);
   std::vector<RegionSearch> runs(regions.size() * searches);
-  const double left = timeLimit > 0.0 ? std::max(timeLimit - secondsSince(start), 1e-3) : 0.0;
   tbb::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t j) {
     const std::size_t k = j / searches, s = j % searches;
     const std::uint64_t seed = mixSeed(options.evolve.seed, k);
     runs[j] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
-                           s == 0 ? seed : mixSeed(seed, s), left);
+                           s == 0 ? seed : mixSeed(seed, s), control);
   });
   std::vector<RegionSearch> found(regions.size());
   for (std::size_t k = 0; k < regions.size(); ++k) {
@@ -561,8 +560,8 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   }
   out.tree = library.adopt(assemble(-1));
   // Redundancy removal evaluates the tree once per node and operand on all
-  // points: skipped once the time limit is spent.
-  if (timeLimit <= 0.0 || secondsSince(start) < timeLimit) {
+  // points: skipped once the time limit is spent (or the work cancelled).
+  if (!control.shouldStop()) {
     out.tree = removeRedundancy(out.tree, model);
   }
   out.after = model.evaluate(out.tree);

@@ -143,12 +143,12 @@ struct HybridResult {
 
 /// Refines a tree on an oriented scan. `candidates` are the bounded
 /// hypotheses (their leaves are the extra primitives), `grid` and `inside`
-/// the voxel labels. `timeLimit` (seconds, 0: none) bounds the searches,
-/// which then keep their best trees.
+/// the voxel labels. `control`'s deadline bounds the searches, which then
+/// keep their best trees; a cancel request stops them too.
 /// @throw std::invalid_argument when the scan has no normals or the tree is empty.
 HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
                         std::span<const Candidate> candidates, const VoxelGrid& grid,
                         const VoxelSet& inside, const HybridOptions& options = {},
-                        double timeLimit = 0.0);
+                        const RunControl& control = {});
 
 }  // namespace csgvox

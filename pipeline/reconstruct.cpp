@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/nearest_neighbors.h"
+#include "core/run_control.h"
 
 namespace csgvox {
 namespace {
@@ -43,45 +44,54 @@ class StageClock {
 
 }  // namespace
 
-double Reconstruction::voxelIou() const {
-  const std::size_t either = VoxelSet::countOr(voxels, labels.inside);
-  if (either == 0) return 1.0;
-  return double(VoxelSet::countAnd(voxels, labels.inside)) / double(either);
-}
+double Reconstruction::voxelIou() const { return VoxelSet::iou(voxels, labels.inside); }
 
-std::string_view methodName(Method method) {
-  switch (method) {
-    case Method::Gp:
-      return "gp";
-    case Method::Imported:
-      return "import-gp";
-    case Method::Hybrid:
-      return "hybrid";
-    case Method::Voxel:
-      break;
-  }
-  return "voxel";
-}
+std::string_view methodName(Method method) { return nameOf<Method>(kMethodNames, method); }
 
 Method methodFromName(std::string_view name) {
-  if (name == "voxel") return Method::Voxel;
-  if (name == "gp") return Method::Gp;
-  if (name == "hybrid") return Method::Hybrid;
-  throw std::invalid_argument("unknown method '" + std::string(name) + "' (hybrid, voxel or gp)");
+  return valueNamed<Method>(kMethodNames, name, "method");
+}
+
+void validate(const ReconstructOptions& o) {
+  namespace r = option_ranges;
+  checkRange("res", o.resolution, r::resolution);
+  checkRange("neighbors", o.labels.neighbors, r::neighbors);
+  checkRange("vote_epsilon", o.labels.epsilon, r::voteEpsilon);
+  checkRange("alpha", o.construct.subtree.alpha, r::fitWeight);
+  checkRange("beta", o.construct.unionChoice.beta, r::fitWeight);
+  const HybridOptions& h = o.hybrid;
+  checkRange("repair_generations", double(h.evolve.maxGenerations), r::generations);
+  checkRange("repair_stall", double(h.evolve.stallGenerations), r::generations);
+  checkRange("repair_searches", double(h.searches), r::searches);
+  checkRange("repair_population", double(h.evolve.population), r::population);
+  checkRange("bad_angle", h.badAngle, r::angle);
+  const GpOptions& g = o.gp;
+  checkRange("population", double(g.evolve.population), r::population);
+  checkRange("generations", double(g.evolve.maxGenerations), r::generations);
+  checkRange("stall", double(g.evolve.stallGenerations), r::generations);
+  checkRange("crossover", g.evolve.crossoverRate, r::probability);
+  checkRange("mutation", g.evolve.mutationRate, r::probability);
+  checkRange("max_depth", g.evolve.variation.maxDepth, r::maxDepth);
+  checkRange("angle", g.fitness.angleTolerance, r::angle);
+  checkRange("distance", g.fitness.distanceTolerance, r::distance);
+  checkRange("voxel_weight", g.fitness.voxelWeight, r::voxelWeight);
+  checkRange("rough_points", double(g.roughPoints), r::roughPoints);
 }
 
 namespace {
 
 // The optimisations of Wu et al. on the labelled voxels.
-void voxelMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
-                 StageClock& clock, Clock::time_point deadline,
-                 const std::function<bool(double, std::string_view)>& report) {
+Construction voxelMethod(Reconstruction& out, const PointCloud& scan,
+                         const ReconstructOptions& options, StageClock& clock,
+                         const RunControl& control) {
   clock.start("description_sets");
   std::vector<CsgTree> candidates;
   candidates.reserve(out.hypotheses.candidates.size());
   for (const Candidate& c : out.hypotheses.candidates) candidates.push_back(c.tree);
-  const std::vector<DescriptionSet> descriptions = describeAll(candidates, out.grid, out.labels);
+  const std::vector<DescriptionSet> descriptions =
+      describeAll(candidates, out.grid, out.labels, control);
   clock.finish(std::to_string(descriptions.size()) + " sets");
+  if (control.cancelled()) return {};
 
   clock.start("optimisation");
   ConstructOptions co = options.construct;
@@ -97,83 +107,77 @@ void voxelMethod(Reconstruction& out, const PointCloud& scan, const ReconstructO
       return d2 <= nearScan * nearScan;
     };
   }
-  co.subtree.deadline = std::min(co.subtree.deadline, deadline);
-  co.unionChoice.deadline = std::min(co.unionChoice.deadline, deadline);
-  out.construction = constructCsg(candidates, descriptions, out.labels.inside, co, report);
-  out.timeLimitHit = out.timeLimitHit || Clock::now() > deadline;
-  const ConstructStats& st = out.construction.stats;
+  co.subtree.control = control;
+  co.unionChoice.control = control;
+  Construction built =
+      constructCsg(candidates, descriptions, out.labels.inside, co, control.asProgress());
+  out.timeLimitHit = out.timeLimitHit || control.pastDeadline();
+  const ConstructStats& st = built.stats;
   clock.finish(std::to_string(st.chosen) +
                (st.chosen == 1 ? " union member (" : " union members (") +
                std::to_string(st.selected) + " of " + std::to_string(st.unionCandidates) +
-               " candidates selected" + (st.chosen != st.selected ? ", then refined" : "") +
+               " candidates selected" +
+               (st.chosen != st.selected ? ", then changed by the union search" : "") +
                (st.provedOptimal ? ", proved optimal)" : ")"));
-  out.tree = out.construction.tree;
-  out.voxels = out.construction.voxels;
+  out.tree = built.tree;
+  out.voxels = built.voxels;
+  return built;
 }
 
 // The genetic-programming baseline on the points.
 void gpMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
-              StageClock& clock, Clock::time_point deadline, const ProgressCallback& progress) {
+              StageClock& clock, const RunControl& control) {
   clock.start("evolve");
   GpOptions go = options.gp;
   go.evolve.seed = options.seed;
-  if (deadline != Clock::time_point::max()) {
-    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
-    go.evolve.timeLimit = std::max(left, 1e-3);
-  }
+  go.evolve.control = control;
   VoxelTarget target;
   if (go.fitness.voxelWeight > 0.0) target = {out.grid, out.labels.inside};
   const std::size_t most = go.evolve.maxGenerations;
-  out.gp = runGp(
+  GpResult gp = runGp(
       scan, out.detection.surfaces, go,
       [&](const GenerationReport& g) {
-        if (progress) {
-          char step[160];
-          std::snprintf(step, sizeof(step), "generation %zu, best %.6g, %zu nodes, %.0f gen/s%s",
-                        g.generation, g.bestFitness, g.bestNodes,
-                        g.seconds > 0 ? double(g.generation) / g.seconds : 0.0,
-                        g.rough ? " (rough)" : "");
-          progress(most > 0 ? double(g.generation) / double(most) : 1.0, step);
-        }
-        return true;
+        char step[160];
+        std::snprintf(step, sizeof(step), "generation %zu, best %.6g, %zu nodes, %.0f gen/s%s",
+                      g.generation, g.bestFitness, g.bestNodes,
+                      g.seconds > 0 ? double(g.generation) / g.seconds : 0.0,
+                      g.rough ? " (rough)" : "");
+        return control.report(most > 0 ? double(g.generation) / double(most) : 1.0, step);
       },
       go.fitness.voxelWeight > 0.0 ? &target : nullptr);
-  out.timeLimitHit = out.timeLimitHit || out.gp.search.stop == EvolveStop::TimeLimit;
-  const EvolveResult& s = out.gp.search;
+  out.timeLimitHit = out.timeLimitHit || gp.search.stop == EvolveStop::TimeLimit;
+  const EvolveResult& s = gp.search;
   char summary[200];
   std::snprintf(summary, sizeof(summary),
                 "%zu generations (%s), %zu trees evaluated, fitness %.6g, %zu primitives in the "
                 "library (%zu separators)",
                 s.generations, std::string(evolveStopName(s.stop)).c_str(), s.evaluations,
-                s.fitness.total, out.gp.primitives.library.size(), out.gp.primitives.separators);
+                s.fitness.total, gp.primitives.library.size(), gp.primitives.separators);
   std::string note = summary;
-  if (out.gp.partitioned) {
-    const PartitionedResult& p = *out.gp.partitioned;
+  if (gp.partitioned) {
+    const PartitionedResult& p = *gp.partitioned;
     std::snprintf(summary, sizeof(summary),
                   "; %zu partitions searched in %.2f s, merged to %zu nodes, final search %.2f s",
                   p.partitions.size(), p.searchSeconds, p.mergedNodes, p.finalSeconds);
     note += summary;
   }
   clock.finish(note);
-  out.tree = out.gp.tree;
+  out.tree = gp.tree;
   out.voxels = solidVoxels(out.tree, out.grid);
+  out.result = GpMethodResult{std::move(gp)};
 }
 
-// The hybrid method's refinement of the voxel tree on the points.
-void hybridMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOptions& options,
-                  StageClock& clock, Clock::time_point deadline) {
-  clock.start("refine");
+// The hybrid method's repair of the voxel tree on the points, then the finish.
+void hybridMethod(Reconstruction& out, HybridMethodResult& hy, const PointCloud& scan,
+                  const ReconstructOptions& options, StageClock& clock, const RunControl& control) {
+  clock.start("repair");
   HybridOptions ho = options.hybrid;
   ho.evolve.seed = options.seed;
   ho.noise = out.detection.noise;
-  double left = 0.0;
-  if (deadline != Clock::time_point::max()) {
-    left = std::max(std::chrono::duration<double>(deadline - Clock::now()).count(), 1e-3);
-  }
-  out.voxelTree = out.tree;
-  out.hybrid =
-      refineTree(scan, out.tree, out.hypotheses.candidates, out.grid, out.labels.inside, ho, left);
-  const HybridResult& h = out.hybrid;
+  hy.voxelTree = out.tree;
+  hy.repair = refineTree(scan, out.tree, out.hypotheses.candidates, out.grid, out.labels.inside, ho,
+                         control);
+  const HybridResult& h = hy.repair;
   char summary[200];
   std::snprintf(summary, sizeof(summary),
                 "%zu badly explained points, %zu regions, %zu subtrees replaced, fitness %.6g -> "
@@ -182,13 +186,13 @@ void hybridMethod(Reconstruction& out, const PointCloud& scan, const Reconstruct
                 h.primitivesBefore, h.primitivesAfter);
   clock.finish(summary);
   out.tree = h.tree;
-  if (options.finish.enabled && Clock::now() < deadline) {
+  if (options.finish.enabled && !control.shouldStop()) {
     clock.start("finish");
     FinishOptions fo = options.finish;
     fo.fitness = ho.fitness;
     const VoxelTarget target{out.grid, out.labels.inside};
-    out.finish = finishTree(scan, out.tree, &target, fo);
-    const FinishResult& f = out.finish;
+    hy.finish = finishTree(scan, out.tree, &target, fo);
+    const FinishResult& f = hy.finish;
     std::snprintf(summary, sizeof(summary), "residual RMS %.4g -> %.4g, fitness %.6g -> %.6g, %s",
                   f.fit.rmsBefore, f.fit.rmsAfter, f.before.total, f.after.total,
                   f.accepted ? "accepted" : "input kept");
@@ -198,18 +202,38 @@ void hybridMethod(Reconstruction& out, const PointCloud& scan, const Reconstruct
   out.voxels = solidVoxels(out.tree, out.grid);
 }
 
-Clock::time_point deadlineOf(double timeLimit) {
-  return timeLimit > 0.0 ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                              std::chrono::duration<double>(timeLimit))
-                         : Clock::time_point::max();
+// The reconstruction stopped by a cancel request after `stage`.
+Reconstruction cancelledAfter(Reconstruction out, std::string_view stage) {
+  out.status = Reconstruction::Status::Cancelled;
+  out.message = "cancelled during " + std::string(stage);
+  out.tree = CsgTree();
+  return out;
+}
+
+// Fails with TooLarge when the voxel stage would need more than the memory
+// limit; true when it fits.
+bool fitsInMemory(Reconstruction& out, const ReconstructOptions& options) {
+  if (options.method == Method::Gp || options.memoryLimit == 0) return true;
+  const double need = voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount());
+  if (need <= double(options.memoryLimit)) return true;
+  // Voxel count grows with the cube of the resolution.
+  const double fit = double(out.resolution) * std::cbrt(double(options.memoryLimit) / need);
+  out.status = Reconstruction::Status::TooLarge;
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
+                "than the %.1f GiB allowed; use a resolution of at most %d",
+                out.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
+                out.grid.voxelCount(), double(options.memoryLimit) / double(1u << 30), int(fit));
+  out.message = buf;
+  return false;
 }
 
 // Everything after detection, into `out` (which may hold timings already);
 // `found` is taken over.
 Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
                               const PointCloud& scan, const ReconstructOptions& options,
-                              const StageCallback& onStage, const ProgressCallback& progress,
-                              Clock::time_point deadline) {
+                              const StageCallback& onStage, const RunControl& control) {
   StageClock clock(out, onStage);
   out.method = options.method;
   out.detection = std::move(found.detection);
@@ -217,43 +241,34 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.hypotheses = std::move(found.hypotheses);
   out.resolution = found.resolution;
   out.thin = std::move(found.thin);
-  out.timeLimitHit = Clock::now() > deadline;
-  if (options.method != Method::Gp && options.memoryLimit > 0) {
-    const double need = voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount());
-    if (need > double(options.memoryLimit)) {
-      // Voxel count grows with the cube of the resolution.
-      const double fit = double(out.resolution) * std::cbrt(double(options.memoryLimit) / need);
-      out.status = Reconstruction::Status::TooLarge;
-      char buf[256];
-      std::snprintf(buf, sizeof(buf),
-                    "resolution %d needs about %.1f GiB for %zu candidates on %zu voxels, more "
-                    "than the %.1f GiB allowed; use a resolution of at most %d",
-                    out.resolution, need / double(1u << 30), out.hypotheses.candidates.size(),
-                    out.grid.voxelCount(), double(options.memoryLimit) / double(1u << 30),
-                    int(fit));
-      out.message = buf;
-      return out;
-    }
-  }
+  out.timeLimitHit = control.pastDeadline();
+  if (!fitsInMemory(out, options)) return out;
+  if (control.cancelled()) return cancelledAfter(std::move(out), "hypotheses");
 
   clock.start("labels");
   LabelOptions lo = options.labels;
   lo.noise = out.detection.noise;
+  lo.control = control;
   out.labels = labelVoxels(out.grid, scan, lo);
   clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
                " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
+  if (control.cancelled()) return cancelledAfter(std::move(out), "labels");
 
-  const auto report = [&](double fraction, std::string_view step) {
-    if (progress) progress(fraction, step);
-    return true;
-  };
   if (options.method == Method::Gp) {
-    gpMethod(out, scan, options, clock, deadline, progress);
+    gpMethod(out, scan, options, clock, control);
+  } else if (options.method == Method::Voxel) {
+    out.result = VoxelMethodResult{voxelMethod(out, scan, options, clock, control)};
   } else {
-    voxelMethod(out, scan, options, clock, deadline, report);
-    if (options.method == Method::Hybrid && !out.tree.empty()) {
-      hybridMethod(out, scan, options, clock, deadline);
+    HybridMethodResult hy;
+    hy.construction = voxelMethod(out, scan, options, clock, control);
+    if (!out.tree.empty() && !control.cancelled()) {
+      hybridMethod(out, hy, scan, options, clock, control);
     }
+    out.result = std::move(hy);
+  }
+  if (control.cancelled()) {
+    const std::string stage = out.timings.empty() ? "labels" : out.timings.back().stage;
+    return cancelledAfter(std::move(out), stage);
   }
   if (out.tree.empty()) {
     out.status = Reconstruction::Status::NoCombination;
@@ -270,14 +285,12 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
 }  // namespace
 
 Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options,
-                           const StageCallback& onStage, const ProgressCallback& progress) {
+                           const StageCallback& onStage, const RunControl& control) {
   Reconstruction out;
-  const Clock::time_point deadline = deadlineOf(options.timeLimit);
-  const auto pastDeadline = [&] { return Clock::now() > deadline; };
-
   // Detection stops at the deadline. After it, a limit never costs the
   // tree: labels and description sets run to the end, and the optimisation
   // (or the search) stops at the deadline and keeps the best tree it has.
+  // A cancel request stops any stage.
   DetectAndFitOptions fo;
   fo.resolution = options.resolution;
   fo.seed = options.seed;
@@ -286,11 +299,11 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   fo.memoryLimit = options.memoryLimit;
   SurfacesAndCandidates found =
       detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
-        if (progress) progress(fraction, step);
-        return !pastDeadline();
+        return control.report(fraction, step) && !control.pastDeadline();
       });
-  if (found.detection.status == DetectionResult::Status::Cancelled) {
+  if (found.detection.status == DetectionResult::Status::Cancelled || control.cancelled()) {
     out.detection = std::move(found.detection);
+    if (control.cancelled()) return cancelledAfter(std::move(out), "detection");
     out.status = Reconstruction::Status::TimedOut;
     out.message = "time limit reached during detection";
     out.timeLimitHit = true;
@@ -305,18 +318,16 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   out.timings.push_back(
       {"detect", found.detectSeconds + found.refineSeconds + found.regularizeSeconds});
   out.timings.push_back({"hypotheses", found.hypothesisSeconds});
-  return afterDetection(std::move(out), std::move(found), scan, options, onStage, progress,
-                        deadline);
+  return afterDetection(std::move(out), std::move(found), scan, options, onStage, control);
 }
 
 Reconstruction reconstructDetected(const PointCloud& scan, const SurfacesAndCandidates& found,
                                    const ReconstructOptions& options, const StageCallback& onStage,
-                                   const ProgressCallback& progress) {
+                                   const RunControl& control) {
   if (!found.ok()) throw std::invalid_argument("reconstructDetected: the detection found nothing");
   if (!scan.hasNormals())
     throw std::invalid_argument("reconstructDetected: the scan has no normals");
-  return afterDetection(Reconstruction{}, found, scan, options, onStage, progress,
-                        deadlineOf(options.timeLimit));
+  return afterDetection(Reconstruction{}, found, scan, options, onStage, control);
 }
 
 }  // namespace csgvox

@@ -7,14 +7,18 @@
 /// description sets → Wu's two optimisations and the simplified tree → (hybrid)
 /// the genetic search repairs the tree where the points disagree with it.
 
+#include <array>
 #include <functional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
+#include "core/named_values.h"
 #include "core/point_cloud.h"
 #include "core/progress.h"
+#include "core/run_control.h"
 #include "optimize/csg_construction.h"
 #include "pipeline/detect_and_fit.h"
 #include "pipeline/finish.h"
@@ -30,16 +34,22 @@ namespace csgvox {
 
 /// How the tree is built from the detected surfaces.
 enum class Method {
-  Hybrid,    ///< the voxel method, then the genetic search repairs its tree where the points
-             ///< disagree (pipeline/hybrid_method.h)
-  Voxel,     ///< Wu et al.'s bounded hypotheses and two binary optimisations over voxels
-  Gp,        ///< the genetic-programming baseline (Fayolle & Pasko 2016) on the points
-  Imported,  ///< not built here: a tree read from a file (`compare --import-gp`)
+  Hybrid,  ///< the voxel method, then the genetic search repairs its tree where the points
+           ///< disagree (pipeline/hybrid_method.h)
+  Voxel,   ///< Wu et al.'s bounded hypotheses and two binary optimisations over voxels
+  Gp,      ///< the genetic-programming baseline (Fayolle & Pasko 2016) on the points
 };
 
-/// "hybrid", "voxel", "gp" or "import-gp".
+/// The names of the methods ("hybrid", "voxel", "gp"), as users give them.
+inline constexpr std::array<NamedValue<Method>, 3> kMethodNames = {{
+    {"hybrid", Method::Hybrid},
+    {"voxel", Method::Voxel},
+    {"gp", Method::Gp},
+}};
+
+/// "hybrid", "voxel" or "gp".
 std::string_view methodName(Method method);
-/// Inverse of methodName for the methods that build trees ("hybrid", "voxel", "gp").
+/// Inverse of methodName.
 /// @throw std::invalid_argument for other names.
 Method methodFromName(std::string_view name);
 
@@ -50,23 +60,15 @@ struct ReconstructOptions {
   /// Up to twice the resolution when the surfaces show a feature thinner
   /// than two voxels (DetectAndFitOptions::refineThin).
   bool refineThin = true;
-  std::uint64_t seed = 1;          ///< seeds detection and hypotheses; same seed, same tree
-  DetectOptions detect;            ///< surface detection (its seed is replaced by `seed`)
-  LabelOptions labels;             ///< voxel labelling
+  std::uint64_t seed = 1;      ///< seeds detection and hypotheses; same seed, same tree
+  DetectOptions detect;        ///< surface detection (its seed is replaced by `seed`)
+  LabelOptions labels;         ///< voxel labelling
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
   HybridOptions hybrid;        ///< hybrid method: the refinement (its seed is set from `seed`)
   FinishOptions finish;        ///< hybrid method: the parameter fit last (its fitness is set from
                                ///< hybrid.fitness)
-  GpOptions gp;                ///< gp method: the search (its seed and time limit are set from
-                               ///< `seed` and `timeLimit`)
-  /// Wall-clock seconds for the whole call (0: none). Detection past the
-  /// limit fails (status TimedOut); after detection a limit never costs the
-  /// tree: labels and description sets run to their end, and the
-  /// optimisations stop searching and keep the best solution their local
-  /// search found, so the tree is still valid but may not be the proved
-  /// optimum (stats.provedOptimal is then false). A limit that is hit makes
-  /// the result depend on the machine's speed.
-  double timeLimit = 0.0;
+  GpOptions gp;                ///< gp method: the search (its seed and control are set from
+                               ///< `seed` and the call's RunControl)
   /// Bytes the voxel stage may use (0: no limit). The description sets take
   /// about candidates × voxels / 8 bytes and the optimisation up to twice
   /// that again; a resolution that would need more fails before labelling
@@ -74,11 +76,57 @@ struct ReconstructOptions {
   std::size_t memoryLimit = std::size_t(4) << 30;
 };
 
+/// The accepted range of every numeric option a user sets (command line,
+/// Python): validate() checks them, and the command line shows the same.
+namespace option_ranges {
+inline constexpr OptionRange resolution{8, 1024};      ///< voxels along the longest side
+inline constexpr OptionRange meshResolution{8, 2048};  ///< mesh.ply's grid
+inline constexpr OptionRange timeLimit{0.0, 1e6};      ///< seconds (a RunControl's)
+inline constexpr OptionRange neighbors{1, 1000};       ///< vote: K
+inline constexpr OptionRange voteEpsilon{0.0, 1.0};    ///< vote: facing fraction
+inline constexpr OptionRange fitWeight{0.0, 100.0};    ///< voxel: alpha, beta of Wu Eq. 4, 6
+inline constexpr OptionRange generations{0, 1e7};      ///< most generations, or stall length
+inline constexpr OptionRange searches{1, 64};          ///< hybrid: searches per region
+inline constexpr OptionRange population{3, 100000};    ///< creatures per generation
+inline constexpr OptionRange angle{0.1, 180.0};        ///< degrees
+inline constexpr OptionRange probability{0.0, 1.0};    ///< crossover, mutation
+inline constexpr OptionRange maxDepth{2, 1000};        ///< gp: levels
+inline constexpr OptionRange distance{1e-6, 1.0};      ///< gp: fraction of the diagonal
+inline constexpr OptionRange voxelWeight{0.0, 1e6};    ///< gp: weight of the volumetric term
+inline constexpr OptionRange roughPoints{0, 1e9};      ///< gp: points per rough generation
+}  // namespace option_ranges
+
+/// Checks every user-set option of `options` against option_ranges.
+/// @throw std::invalid_argument "<option> must be in [lo, hi]" for the first one outside.
+void validate(const ReconstructOptions& options);
+
 /// Seconds spent in one stage.
 struct StageTime {
   std::string stage;
   double seconds = 0.0;
 };
+
+/// What the voxel method built.
+struct VoxelMethodResult {
+  Construction construction;  ///< the optimisations' result
+};
+
+/// What the hybrid method built: the voxel method's tree, then the repair.
+struct HybridMethodResult {
+  Construction construction;  ///< the voxel stage's optimisations
+  CsgTree voxelTree;          ///< the voxel stage's tree, before the repair
+  HybridResult repair;        ///< what the genetic repair search changed
+  FinishResult finish;        ///< what the parameter fit did (finish.ran: whether it ran)
+};
+
+/// What the genetic-programming baseline built.
+struct GpMethodResult {
+  GpResult gp;  ///< the search's result
+};
+
+/// One method's own result; empty (monostate) until a method has run.
+using MethodResult =
+    std::variant<std::monostate, VoxelMethodResult, HybridMethodResult, GpMethodResult>;
 
 /// Everything reconstruct() produced.
 struct Reconstruction {
@@ -88,6 +136,7 @@ struct Reconstruction {
     NoCombination,  ///< no combination of the hypotheses explains the labelled voxels
     TimedOut,       ///< the time limit ran out before a tree existed
     TooLarge,       ///< the voxel stage would need more than memoryLimit
+    Cancelled,      ///< the RunControl was cancelled (no tree)
   };
   Status status = Status::NoSurfaces;
   std::string message;  ///< one line: what was built, or why nothing was
@@ -95,15 +144,11 @@ struct Reconstruction {
   DetectionResult detection;
   HypothesisSet hypotheses;
   VoxelGrid grid;
-  int resolution = 0;              ///< the grid's (finer than asked when the part is thin)
-  std::vector<ThinFeature> thin;   ///< features thinner than two voxels at the asked resolution
+  int resolution = 0;             ///< the grid's (finer than asked when the part is thin)
+  std::vector<ThinFeature> thin;  ///< features thinner than two voxels at the asked resolution
   VoxelLabels labels;
-  Method method = Method::Voxel;   ///< the method that built `tree`
-  Construction construction;       ///< voxel method: the optimisations' result
-  GpResult gp;                     ///< gp method: the search's result
-  HybridResult hybrid;             ///< hybrid method: what the refinement changed
-  FinishResult finish;             ///< hybrid method: what the parameter fit did
-  CsgTree voxelTree;               ///< hybrid method: the voxel stage's tree it refined
+  Method method = Method::Voxel;   ///< the method asked for
+  MethodResult result;             ///< the method's own result (monostate when none ran)
   VoxelSet voxels;                 ///< voxels whose centre `tree` holds
   std::vector<StageTime> timings;  ///< in pipeline order
   bool timeLimitHit = false;       ///< the limit stopped a search early
@@ -111,25 +156,36 @@ struct Reconstruction {
   bool ok() const { return status == Status::Ok; }
   /// Voxel IoU of the tree's voxels against the inside labels.
   double voxelIou() const;
+  /// The method's result when it is a T, else null.
+  template <class T>
+  const T* resultAs() const {
+    return std::get_if<T>(&result);
+  }
 };
 
-/// Runs the whole reconstruction on an oriented scan. `progress`, when
-/// given, is called now and then inside the long stages (detection and the
-/// optimisation) with the fraction of the stage done and a short name of its
-/// current step. Its return value is ignored: timeLimit bounds a run.
+/// Runs the whole reconstruction on an oriented scan. `onStage` hears each
+/// stage start and end (with a one-line summary). `control` bounds the run:
+/// its progress callback hears the long stages' fraction done and current
+/// step; past its deadline detection fails (status TimedOut), while after
+/// detection a limit never costs the tree: labels and description sets run
+/// to their end, and the optimisations and searches stop and keep the best
+/// solution found so far (the tree is valid but may not be the proved
+/// optimum; stats.provedOptimal is then false, timeLimitHit true; the result
+/// then depends on the machine's speed). A cancel request (control.cancel(),
+/// or the progress callback returning false) stops whatever stage runs,
+/// with status Cancelled and no tree.
 /// @throw std::invalid_argument when the scan has no normals or is empty.
 Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& options = {},
-                           const StageCallback& onStage = {},
-                           const ProgressCallback& progress = {});
+                           const StageCallback& onStage = {}, const RunControl& control = {});
 
 /// The stages after detection (labels, then the method's own), on surfaces
 /// and candidates detectAndFit() already made for this scan with the same
-/// resolution and seed: what `csgvox compare` runs once per method. The time
-/// limit counts from this call. `found` must be ok().
+/// resolution and seed: what `csgvox compare` runs once per method. `found`
+/// must be ok().
 /// @throw std::invalid_argument when `found` is not ok() or the scan has no normals.
 Reconstruction reconstructDetected(const PointCloud& scan, const SurfacesAndCandidates& found,
                                    const ReconstructOptions& options = {},
                                    const StageCallback& onStage = {},
-                                   const ProgressCallback& progress = {});
+                                   const RunControl& control = {});
 
 }  // namespace csgvox

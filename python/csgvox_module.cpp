@@ -14,14 +14,14 @@
 #include <string>
 #include <vector>
 
-#include "app/console.h"
-#include "app/job.h"
 #include "io/errors.h"
 #include "io/point_arrays.h"
 #include "io/scad_export.h"
 #include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
+#include "job/console.h"
+#include "job/job.h"
 #include "pipeline/reconstruct.h"
 #include "primitives/solver_log.h"
 
@@ -81,22 +81,17 @@ struct Result {
 Result reconstructArrays(const Array& points, const std::optional<Array>& normals, int res,
                          std::uint64_t seed, const std::string& method, const std::string& label,
                          const std::string& labelBoundary, double timeLimit) {
-  app::JobSettings settings;
-  settings.resolution = res;
-  settings.seed = seed;
-  settings.method = method;
-  settings.labelMethod = label;
-  settings.boundary = labelBoundary;
-  settings.pipeline.timeLimit = timeLimit;
-  if (res < 8 || res > 1024) throw std::invalid_argument("res must be in [8, 1024]");
-  if (label != "winding" && label != "vote") {
-    throw std::invalid_argument("label must be \"winding\" or \"vote\"");
-  }
-  if (labelBoundary != "centre" && labelBoundary != "inside") {
-    throw std::invalid_argument("label_boundary must be \"centre\" or \"inside\"");
-  }
-  if (!(timeLimit >= 0.0)) throw std::invalid_argument("time_limit must be >= 0");
-  ReconstructOptions options = app::pipelineOptions(settings);  // checks the method's name
+  JobOptions job;
+  ReconstructOptions& options = job.reconstruct;
+  options.resolution = res;
+  options.seed = seed;
+  options.method = methodFromName(method);
+  options.labels.method = labelMethodFromName(label);
+  options.labels.boundary =
+      valueNamed<BoundaryRule>(kBoundaryRuleNames, labelBoundary, "label boundary");
+  job.timeLimit = timeLimit;
+  validate(options);
+  checkRange("time_limit", timeLimit, option_ranges::timeLimit);
 
   std::vector<Vec3> p = toVectors(points, "points");
   std::vector<Vec3> n = normals ? toVectors(*normals, "normals") : std::vector<Vec3>{};
@@ -106,16 +101,15 @@ Result reconstructArrays(const Array& points, const std::optional<Array>& normal
     py::gil_scoped_release release;
     ReadOptions ro;
     ro.seed = seed;
-    app::Stopwatch watch;
+    Stopwatch watch;
     const Scan scan = scanFromArrays(std::move(p), std::move(n), "points", ro);
     nlohmann::ordered_json timings;
     timings["read"] = watch.seconds();
-    const Reconstruction rec = reconstruct(scan.cloud, options);
+    const Reconstruction rec = reconstruct(scan.cloud, options, {}, RunControl(timeLimit));
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError("points: " + rec.message);
-    const app::Console quiet(true);
-    report = app::jobReport("<array>", scan, rec, settings, timings,
-                            nlohmann::ordered_json::array(), quiet);
+    const Console quiet(true);
+    report = reportWithoutFiles("<array>", scan, rec, job, timings, quiet);
     result.tree = rec.tree;
   }
   result.report = toPython(report);
@@ -214,7 +208,8 @@ PYBIND11_MODULE(csgvox, m) {
       "ParseError with the file's name and the problem.");
 
   m.def("reconstruct", &reconstructArrays, py::arg("points"), py::arg("normals") = py::none(),
-        py::arg("res") = 64, py::arg("seed") = 1, py::arg("method") = app::JobSettings().method,
+        py::arg("res") = 64, py::arg("seed") = 1,
+        py::arg("method") = std::string(methodName(ReconstructOptions().method)),
         py::arg("label") = "winding", py::arg("label_boundary") = "centre",
         py::arg("time_limit") = 0.0,
         "The main job on an (N, 3) array of points with outward normals (estimated when\n"

@@ -102,6 +102,34 @@ TEST_F(Cli, CompareShowsEveryMethodAndTheImportedTree) {
   EXPECT_GT(summary["rows"][3]["operations"].get<int>(),
             summary["rows"][2]["operations"].get<int>());
   EXPECT_EQ(run("compare " + kCube + " --methods voxel,magic", dir_).code, 1);
+  // The imported tree is measured on the same grid as the built ones.
+  EXPECT_EQ(readJson(dir_ / "cmp" / "import-gp" / "report.json")["grid"]["resolution"],
+            readJson(dir_ / "cmp" / "voxel" / "report.json")["grid"]["resolution"]);
+}
+
+// The repair search's options under their names, and under the names they
+// had before (kept for one release): the same settings, reported under both.
+TEST_F(Cli, RepairOptionsAndTheirOldNames) {
+  const std::string common = kCube + " -q --res 24 --repair-generations 5 --no-preview ";
+  ASSERT_EQ(run(common + "--repair-stall 3 --repair-searches 2 --no-finer-grid -o " +
+                    (dir_ / "new").string(),
+                dir_, 300)
+                .code,
+            0);
+  ASSERT_EQ(run(common + "--refine-stall 3 --refine-searches 2 --no-refine-thin -o " +
+                    (dir_ / "old").string(),
+                dir_, 300)
+                .code,
+            0);
+  const nlohmann::json a = readJson(dir_ / "new" / "report.json");
+  const nlohmann::json b = readJson(dir_ / "old" / "report.json");
+  EXPECT_EQ(a["parameters"]["repair_stall"], 3);
+  EXPECT_EQ(a["parameters"]["repair_searches"], 2);
+  EXPECT_EQ(a["parameters"]["refine_stall"], 3);
+  EXPECT_EQ(a["parameters"], b["parameters"]);
+  EXPECT_EQ(slurp(dir_ / "new" / "tree.json"), slurp(dir_ / "old" / "tree.json"));
+  EXPECT_EQ(run(kCube + " --repair-searches 0", dir_).code, 2);
+  EXPECT_EQ(run(kCube + " --repair-operations max", dir_).code, 2);
 }
 
 }  // namespace

@@ -68,9 +68,9 @@ TEST(TreeParameters, SharesTheRelationsAndRebuildsTheTree) {
   // Two boxes side by side: their tops, bottoms, fronts and backs are
   // coplanar and face the same way (4 shared offsets, and the rotation);
   // the faces where they touch face each other (not shared).
-  const CsgTree pair = CsgTree::unite(
-      {CsgTree::leaf(Box{Vec3(5, 5, 2.5), Mat3::Identity(), Vec3(5, 5, 2.5)}),
-       CsgTree::leaf(Box{Vec3(15, 5, 2.5), Mat3::Identity(), Vec3(5, 5, 2.5)})});
+  const CsgTree pair =
+      CsgTree::unite({CsgTree::leaf(Box{Vec3(5, 5, 2.5), Mat3::Identity(), Vec3(5, 5, 2.5)}),
+                      CsgTree::leaf(Box{Vec3(15, 5, 2.5), Mat3::Identity(), Vec3(5, 5, 2.5)})});
   EXPECT_EQ(TreeParameters(pair, 30.0, Vec3::Zero()).sharedBlocks(), 5u);
   std::vector<Primitive> rebuilt;
   ASSERT_TRUE(p.primitives(p.values(), rebuilt));
@@ -193,8 +193,9 @@ TEST(Finish, NeverLowersTheIouAgainstTheTruthOnBundledParts) {
       const Reconstruction a = reconstruct(scan.cloud, with);
       const Reconstruction b = reconstruct(scan.cloud, without);
       ASSERT_TRUE(a.ok() && b.ok()) << part << "/" << file;
-      EXPECT_TRUE(a.finish.ran) << part << "/" << file;
-      EXPECT_FALSE(b.finish.ran);
+      ASSERT_TRUE(a.resultAs<HybridMethodResult>() && b.resultAs<HybridMethodResult>());
+      EXPECT_TRUE(a.resultAs<HybridMethodResult>()->finish.ran) << part << "/" << file;
+      EXPECT_FALSE(b.resultAs<HybridMethodResult>()->finish.ran);
       const double iouA = volumetricIou(a.tree, truth, 150);
       const double iouB = volumetricIou(b.tree, truth, 150);
       EXPECT_GE(iouA, iouB - 1e-3) << part << "/" << file;

@@ -384,7 +384,9 @@ TEST(Hybrid, RebuildsTheThinFeatureParts) {
       const Reconstruction rec = reconstruct(scan.cloud);
       ASSERT_TRUE(rec.ok()) << part << "/" << name << ": " << rec.message;
       const double hybrid = volumetricIou(rec.tree, truth, 300);
-      const double voxel = volumetricIou(rec.voxelTree, truth, 300);
+      const HybridMethodResult* hybridResult = rec.resultAs<HybridMethodResult>();
+      ASSERT_NE(hybridResult, nullptr);
+      const double voxel = volumetricIou(hybridResult->voxelTree, truth, 300);
       EXPECT_GE(hybrid, 0.97) << part << "/" << name;
       EXPECT_GE(hybrid, voxel - 1e-3) << part << "/" << name;
       ++scans;
@@ -395,8 +397,8 @@ TEST(Hybrid, RebuildsTheThinFeatureParts) {
 
 nlohmann::json readJson(const fs::path& p) { return nlohmann::json::parse(slurp(p)); }
 
-// The default method is the hybrid; its report says what the refinement did.
-TEST_F(Cli, HybridIsTheDefaultAndReportsItsRefinement) {
+// The default method is the hybrid; its report says what the repair search did.
+TEST_F(Cli, HybridIsTheDefaultAndReportsItsRepair) {
   const std::string scan = std::string(CSGVOX_DATA_DIR) + "/flange/scan.ply";
   ASSERT_EQ(run(scan + " -q -o " + (dir_ / "h").string(), dir_, 300).code, 0);
   ASSERT_EQ(run(scan + " -q --method voxel -o " + (dir_ / "v").string(), dir_, 300).code, 0);
@@ -404,8 +406,13 @@ TEST_F(Cli, HybridIsTheDefaultAndReportsItsRefinement) {
   const nlohmann::json v = readJson(dir_ / "v" / "report.json");
   EXPECT_EQ(h["parameters"]["method"], "hybrid");
   EXPECT_EQ(v["parameters"]["method"], "voxel");
+  EXPECT_FALSE(v.contains("repair"));
   EXPECT_FALSE(v.contains("refinement"));
-  const nlohmann::json& r = h["refinement"];
+  const nlohmann::json& r = h["repair"];
+  // The section's and the parameters' old names stay for one release.
+  EXPECT_EQ(h["refinement"], r);
+  EXPECT_EQ(h["parameters"]["refine_population"], h["parameters"]["repair_population"]);
+  EXPECT_EQ(h["timings_s"]["refine"], h["timings_s"]["repair"]);
   EXPECT_GE(r["fitness_after"].get<double>(), r["fitness_before"].get<double>());
   EXPECT_EQ(r["primitives_before"], v["tree"]["primitives"]);
   EXPECT_EQ(r["primitives_after"], h["tree"]["primitives"]);

@@ -396,15 +396,16 @@ TEST(MeshTree, UnionOfTenThousandSpheresMeshesLikeTheSpheres) {
   std::vector<std::string> stages;
   double last = -1.0;
   bool monotone = true;
-  const TriangleMesh mesh = meshTree(tree, options, [&](double fraction, std::string_view stage) {
-    if (stages.empty() || stages.back() != stage) {
-      stages.emplace_back(stage);
-      last = -1.0;
-    }
-    monotone = monotone && fraction >= last && fraction <= 1.0;
-    last = fraction;
-    return true;
-  });
+  const TriangleMesh mesh =
+      meshTree(tree, options, RunControl(0.0, [&](double fraction, std::string_view stage) {
+                 if (stages.empty() || stages.back() != stage) {
+                   stages.emplace_back(stage);
+                   last = -1.0;
+                 }
+                 monotone = monotone && fraction >= last && fraction <= 1.0;
+                 last = fraction;
+                 return true;
+               }));
   EXPECT_TRUE(mesh.isClosed());
   const double sphereVolume = 4.0 / 3.0 * kPi * r * r * r;
   // Spheres 2.5 voxels in radius: within a few percent.
@@ -445,10 +446,10 @@ TEST(MeshTree, ProgressCanStopTheMeshing) {
   int calls = 0;
   expectThrowWith<std::runtime_error>(
       [&] {
-        meshTree(tree, {}, [&](double, std::string_view stage) {
-          ++calls;
-          return stage != "sample";
-        });
+        meshTree(tree, {}, RunControl(0.0, [&](double, std::string_view stage) {
+                   ++calls;
+                   return stage != "sample";
+                 }));
       },
       "cancelled");
   EXPECT_GT(calls, 0);

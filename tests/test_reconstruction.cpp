@@ -143,7 +143,7 @@ TEST(Reconstruction, ReportsEveryStageInOrder) {
   ASSERT_TRUE(r.ok()) << r.message;
   // The default (hybrid) method ends with the refinement on the points.
   const std::vector<std::string> stages{"detect",           "hypotheses",   "labels",
-                                        "description_sets", "optimisation", "refine"};
+                                        "description_sets", "optimisation", "repair"};
   EXPECT_EQ(started, stages);
   EXPECT_EQ(finished, stages);
   ASSERT_EQ(r.timings.size(), stages.size());
@@ -156,9 +156,7 @@ TEST(Reconstruction, ReportsEveryStageInOrder) {
 
 TEST(Reconstruction, TinyTimeLimitStopsCleanly) {
   const Scan scan = readScan(test::dataDir() / "housing_complex" / "scan.ply");
-  ReconstructOptions o;
-  o.timeLimit = 1e-6;
-  const Reconstruction r = reconstruct(scan.cloud, o);
+  const Reconstruction r = reconstruct(scan.cloud, {}, {}, RunControl(1e-6));
   // The limit is spent before detection ends: no tree, and the reason.
   EXPECT_EQ(r.status, Reconstruction::Status::TimedOut);
   EXPECT_TRUE(r.tree.empty());
@@ -173,18 +171,71 @@ TEST(Reconstruction, LimitPastDetectionStillGivesTheTree) {
   // labelling" before). Detection of this scan takes about 0.1 s (1-3 s in
   // a sanitised build, hence the slowdown factor).
   const Scan scan = readScan(test::dataDir() / "plate_holes" / "scan.ply");
-  ReconstructOptions o;
-  o.timeLimit = 3.0 * CSGVOX_TEST_SLOWDOWN;
-  const auto start = std::chrono::steady_clock::now();
-  const auto pastDeadline = start + std::chrono::milliseconds(int(1000 * o.timeLimit) + 200);
-  const Reconstruction r =
-      reconstruct(scan.cloud, o, [&](std::string_view stage, bool done, const std::string&) {
+  const double limit = 3.0 * CSGVOX_TEST_SLOWDOWN;
+  const RunControl control(limit);
+  const auto pastDeadline = control.deadline() + std::chrono::milliseconds(200);
+  const Reconstruction r = reconstruct(
+      scan.cloud, {},
+      [&](std::string_view stage, bool done, const std::string&) {
         if (stage == "labels" && !done) std::this_thread::sleep_until(pastDeadline);
-      });
+      },
+      control);
   ASSERT_EQ(r.status, Reconstruction::Status::Ok) << r.message;
   EXPECT_TRUE(r.timeLimitHit);
   EXPECT_FALSE(r.tree.empty());
   EXPECT_GT(r.voxelIou(), 0.9);
+}
+
+// A cancel request stops the run in whatever stage it comes: status
+// Cancelled, no tree, no later stage started, and the stage it came in
+// ends within half a second of the request (made as the stage starts).
+// Each method's own stages are cancelled on their method.
+TEST(Reconstruction, CancelStopsEveryStage) {
+  const Scan scan = readScan(test::dataDir() / "housing_complex" / "scan.ply");
+  const std::vector<std::pair<Method, std::string>> cases = {
+      {Method::Hybrid, "detect"},       {Method::Hybrid, "hypotheses"},
+      {Method::Hybrid, "labels"},       {Method::Hybrid, "description_sets"},
+      {Method::Hybrid, "optimisation"}, {Method::Hybrid, "repair"},
+      {Method::Gp, "evolve"},           {Method::Voxel, "optimisation"}};
+  for (const auto& [method, at] : cases) {
+    ReconstructOptions o;
+    o.method = method;
+    const RunControl control;
+    std::chrono::steady_clock::time_point asked;
+    std::vector<std::string> started;
+    const Reconstruction r = reconstruct(
+        scan.cloud, o,
+        [&](std::string_view stage, bool done, const std::string&) {
+          if (done) return;
+          started.emplace_back(stage);
+          if (stage == at) {
+            asked = std::chrono::steady_clock::now();
+            control.cancel();
+          }
+        },
+        control);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+    EXPECT_EQ(r.status, Reconstruction::Status::Cancelled) << at << ": " << r.message;
+    EXPECT_TRUE(r.tree.empty()) << at;
+    ASSERT_FALSE(started.empty());
+    EXPECT_EQ(started.back(), at) << "a stage started after the request";
+    EXPECT_LT(seconds, 0.5 * CSGVOX_TEST_SLOWDOWN) << at;
+  }
+}
+
+// A progress callback that returns false is a cancel request.
+TEST(Reconstruction, ProgressReturningFalseCancels) {
+  const Scan scan = readScan(test::dataDir() / "plate_holes" / "scan.ply");
+  int calls = 0;
+  const Reconstruction r =
+      reconstruct(scan.cloud, {}, {}, RunControl(0.0, [&](double, std::string_view) {
+                    ++calls;
+                    return false;
+                  }));
+  EXPECT_EQ(r.status, Reconstruction::Status::Cancelled) << r.message;
+  EXPECT_GE(calls, 1);
+  EXPECT_NE(r.message.find("cancelled during detection"), std::string::npos) << r.message;
 }
 
 TEST(Reconstruction, RejectsScansWithoutNormals) {

@@ -55,10 +55,11 @@ DescriptionSet describe(const CsgTree& solid, const VoxelGrid& grid, const Voxel
 }
 
 std::vector<DescriptionSet> describeAll(std::span<const CsgTree> solids, const VoxelGrid& grid,
-                                        const VoxelLabels& labels) {
+                                        const VoxelLabels& labels, const RunControl& control) {
   std::vector<DescriptionSet> out(solids.size());
-  tbb::parallel_for(std::size_t(0), solids.size(),
-                    [&](std::size_t i) { out[i] = describe(solids[i], grid, labels); });
+  tbb::parallel_for(std::size_t(0), solids.size(), [&](std::size_t i) {
+    if (!control.cancelled()) out[i] = describe(solids[i], grid, labels);
+  });
   return out;
 }
 

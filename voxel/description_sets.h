@@ -28,7 +28,9 @@ VoxelSet solidVoxels(const CsgTree& solid, const VoxelGrid& grid);
 DescriptionSet describe(const CsgTree& solid, const VoxelGrid& grid, const VoxelLabels& labels);
 
 /// Descriptions of many solids, in parallel; the result is in input order.
+/// Once `control` is cancelled the remaining solids are skipped (left
+/// empty: the result is then unusable).
 std::vector<DescriptionSet> describeAll(std::span<const CsgTree> solids, const VoxelGrid& grid,
-                                        const VoxelLabels& labels);
+                                        const VoxelLabels& labels, const RunControl& control = {});
 
 }  // namespace csgvox

@@ -292,6 +292,8 @@ VoxelLabels label(const VoxelGrid& grid, const PointCloud& scan, const LabelOpti
   std::vector<char> in(grid.voxelCount(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
+                      // A cancelled run's labels are not used.
+                      if (o.control.cancelled()) return;
                       std::vector<std::uint32_t> scratch;
                       for (std::size_t v = r.begin(); v != r.end(); ++v) {
                         in[v] = rule.inside(grid.center(v), scratch);
@@ -325,14 +327,11 @@ VoxelLabels labelVoxels(const VoxelGrid& grid, const PointCloud& scan, const Lab
 }
 
 std::string_view labelMethodName(LabelMethod method) {
-  return method == LabelMethod::NormalVote ? "vote" : "winding";
+  return nameOf<LabelMethod>(kLabelMethodNames, method);
 }
 
 LabelMethod labelMethodFromName(std::string_view name) {
-  if (name == "vote") return LabelMethod::NormalVote;
-  if (name == "winding") return LabelMethod::WindingNumber;
-  throw std::invalid_argument("unknown labelling method '" + std::string(name) +
-                              "' (use winding or vote)");
+  return valueNamed<LabelMethod>(kLabelMethodNames, name, "labelling method");
 }
 
 }  // namespace csgvox

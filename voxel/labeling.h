@@ -1,9 +1,12 @@
 #pragma once
 /// Inside/outside labels of the voxels of a grid, from an oriented scan.
 
+#include <array>
 #include <string_view>
 
+#include "core/named_values.h"
 #include "core/point_cloud.h"
+#include "core/run_control.h"
 #include "voxel/voxel_grid.h"
 #include "voxel/voxel_set.h"
 
@@ -62,6 +65,7 @@ struct LabelOptions {
                                                  ///< Wu's rule as written)
   bool keepThinWalls =
       true;  ///< Centre: keep inside the occupied voxels of walls no voxel centre falls in
+  RunControl control;  ///< a cancel request stops the labelling (its labels are then unusable)
 };
 
 /// Labels of every voxel of a grid.
@@ -75,6 +79,17 @@ struct VoxelLabels {
 /// @throw std::invalid_argument when the scan has no normals or is empty.
 VoxelLabels labelVoxels(const VoxelGrid& grid, const PointCloud& scan,
                         const LabelOptions& options = {});
+
+/// The names of the labelling methods ("winding", "vote").
+inline constexpr std::array<NamedValue<LabelMethod>, 2> kLabelMethodNames = {{
+    {"winding", LabelMethod::WindingNumber},
+    {"vote", LabelMethod::NormalVote},
+}};
+/// The names of the boundary rules ("centre", "inside").
+inline constexpr std::array<NamedValue<BoundaryRule>, 2> kBoundaryRuleNames = {{
+    {"centre", BoundaryRule::Centre},
+    {"inside", BoundaryRule::Inside},
+}};
 
 /// "winding" or "vote".
 std::string_view labelMethodName(LabelMethod method);

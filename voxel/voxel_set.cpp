@@ -94,6 +94,11 @@ std::size_t VoxelSet::countAndNot(const VoxelSet& a, const VoxelSet& b) {
   return activeBitsetKernels().countAndNot(a.words_.data(), b.words_.data(), a.words_.size());
 }
 
+double VoxelSet::iou(const VoxelSet& a, const VoxelSet& b) {
+  const std::size_t either = countOr(a, b);
+  return either == 0 ? 1.0 : double(countAnd(a, b)) / double(either);
+}
+
 std::size_t VoxelSet::countOr(const VoxelSet& a, const VoxelSet& b) {
   assert(a.bits_ == b.bits_);
   return activeBitsetKernels().countOr(a.words_.data(), b.words_.data(), a.words_.size());

@@ -65,6 +65,8 @@ class VoxelSet {
   static std::size_t countOr(const VoxelSet& a, const VoxelSet& b);
   /// True when a ∩ b is not empty.
   static bool intersects(const VoxelSet& a, const VoxelSet& b);
+  /// |a ∩ b| / |a ∪ b|; 1 when both are empty.
+  static double iou(const VoxelSet& a, const VoxelSet& b);
 
  private:
   void clearPadding();

@@ -140,6 +140,15 @@ def test_reconstruct_errors():
         csgvox.reconstruct(np.zeros((10, 2)))
     with pytest.raises(ValueError, match="unknown method"):
         csgvox.reconstruct(np.zeros((200, 3)), method="magic")
+    # Names and ranges are the command line's, checked before any work.
+    with pytest.raises(ValueError, match=r"^unknown labelling method 'flood' \(winding or vote\)$"):
+        csgvox.reconstruct(np.zeros((200, 3)), label="flood")
+    with pytest.raises(ValueError, match=r"^unknown label boundary 'edge' \(centre or inside\)$"):
+        csgvox.reconstruct(np.zeros((200, 3)), label_boundary="edge")
+    with pytest.raises(ValueError, match=r"^res must be in \[8, 1024\]$"):
+        csgvox.reconstruct(np.zeros((200, 3)), res=4)
+    with pytest.raises(ValueError, match=r"^time_limit must be in \[0, 1e\+06\]$"):
+        csgvox.reconstruct(np.zeros((200, 3)), time_limit=float("nan"))
     points, normals = csgvox.read_scan(SCAN)
     with pytest.raises(csgvox.ParseError, match="non-finite"):
         bad = points.copy()

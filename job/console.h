@@ -1,5 +1,5 @@
 #pragma once
-/// Progress and timing lines on stderr for the command-line tool.
+/// Progress and timing lines on stderr for the command-line tool and the job.
 
 #include <chrono>
 #include <cstdio>
@@ -8,7 +8,7 @@
 
 #include "core/progress.h"
 
-namespace csgvox::app {
+namespace csgvox {
 
 /// Prints "[  1.23 s] message" lines on stderr unless quiet.
 class Console {
@@ -52,4 +52,4 @@ class Stopwatch {
   std::chrono::steady_clock::time_point start_;
 };
 
-}  // namespace csgvox::app
+}  // namespace csgvox

@@ -1,0 +1,44 @@
+#include "core/run_control.h"
+
+#include <algorithm>
+
+namespace csgvox {
+
+RunControl::RunControl() : state_(std::make_shared<State>()) {}
+
+RunControl::RunControl(double timeLimit, ProgressCallback progress)
+    : state_(std::make_shared<State>()), timeLimit_(timeLimit) {
+  state_->progress = std::move(progress);
+  if (timeLimit > 0.0) {
+    deadline_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                   std::chrono::duration<double>(timeLimit));
+  }
+}
+
+double RunControl::secondsLeft() const {
+  if (deadline_ == Clock::time_point::max()) return 0.0;
+  return std::max(std::chrono::duration<double>(deadline_ - Clock::now()).count(), 1e-3);
+}
+
+bool RunControl::report(double fraction, std::string_view stage) const {
+  if (state_->progress && !state_->progress(fraction, stage)) cancel();
+  return !cancelled();
+}
+
+RunControl RunControl::until(Clock::time_point deadline) const {
+  RunControl copy = *this;
+  if (deadline < copy.deadline_) {
+    copy.deadline_ = deadline;
+    copy.timeLimit_ =
+        std::max(std::chrono::duration<double>(deadline - Clock::now()).count(), 1e-3);
+  }
+  return copy;
+}
+
+ProgressCallback RunControl::asProgress() const {
+  return [control = *this](double fraction, std::string_view stage) {
+    return control.report(fraction, stage);
+  };
+}
+
+}  // namespace csgvox
