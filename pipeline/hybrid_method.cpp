@@ -237,30 +237,33 @@ struct RegionSearch {
   CsgTree refined;  // the search's best tree
 };
 
-RegionSearch searchRegion(const PointCloud& scan, const Region& region,
-                          const std::vector<CsgTree>& members,
-                          std::span<const Candidate> candidates, const VoxelGrid& grid,
-                          const VoxelSet& inside, const HybridOptions& options, std::uint64_t seed,
-                          double timeLimit) {
-  const Clock::time_point start = Clock::now();
-  const double diagonal = scan.diagonal();
-  const double tolerance = options.fitness.distanceTolerance * diagonal;
-  RegionSearch out;
-  std::vector<CsgTree> chosen;
-  for (const std::size_t m : region.members) chosen.push_back(members[m]);
-  out.subtree = uniteAll(chosen);
+// What every region's search reads: the scan, the tree's union members, the
+// candidates and the voxel labels.
+struct SearchInputs {
+  const PointCloud& scan;
+  const std::vector<CsgTree>& members;
+  std::span<const Candidate> candidates;
+  const VoxelGrid& grid;
+  const VoxelSet& inside;
+  const HybridOptions& options;
+};
 
-  // The candidates that fit the region: in its box, and with a surface near
-  // many of its bad points; best supported first.
-  std::vector<std::pair<std::size_t, std::size_t>> fits;  // (bad points near it, candidate)
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    const CsgTree& t = candidates[c].tree;
+// A candidate that fits a region: (bad points near it, candidate).
+using Fit = std::pair<std::size_t, std::size_t>;
+
+// The candidates that fit the region: in its box, and with a surface near
+// many of its bad points; best supported first, options.maxCandidates at most.
+std::vector<Fit> fittingCandidates(const SearchInputs& in, const Region& region) {
+  const double tolerance = in.options.fitness.distanceTolerance * in.scan.diagonal();
+  std::vector<Fit> fits;
+  for (std::size_t c = 0; c < in.candidates.size(); ++c) {
+    const CsgTree& t = in.candidates[c].tree;
     if (!meets(t.bounds(), region.box)) continue;
     const std::vector<const Node*> leaves = t.leaves();
     std::size_t near = 0;
     for (const std::uint32_t i : region.bad) {
       for (const Node* leaf : leaves) {
-        if (std::abs(leaf->primitive.value(scan.points[i])) <= 2.0 * tolerance) {
+        if (std::abs(leaf->primitive.value(in.scan.points[i])) <= 2.0 * tolerance) {
           ++near;
           break;
         }
@@ -270,32 +273,47 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   }
   std::stable_sort(fits.begin(), fits.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
-  if (fits.size() > options.maxCandidates) fits.resize(options.maxCandidates);
+  if (fits.size() > in.options.maxCandidates) fits.resize(in.options.maxCandidates);
+  return fits;
+}
 
-  // Where the subtree holds material no point bounds (or leaves a hole no
-  // point bounds), the repairs that would set its voxels right there: a
-  // candidate c, c − q or c ∩ q (q one of the subtree's primitives) taken
-  // away or added, scored by the region's voxels it sets right against the
-  // labels less those it sets wrong. The best become seeds, their
-  // candidates join the library.
+// What a region's search starts from besides its subtree: the voxel repairs
+// and the candidates (the repairs' first, then the fitting ones).
+struct RegionPicks {
   std::vector<Repair> repairs;
+  std::vector<Fit> fits;
+};
+
+// Where the subtree holds material no point bounds (or leaves a hole no
+// point bounds), the repairs that would set its voxels right there: a
+// candidate c, c − q or c ∩ q (q one of the subtree's primitives) taken
+// away or added, scored by the region's voxels it sets right against the
+// labels less those it sets wrong. The best become seeds, their
+// candidates join the library.
+RegionPicks pickCandidates(const SearchInputs& in, const Region& region, const CsgTree& subtree) {
+  const std::vector<Fit> fits = fittingCandidates(in, region);
+  RegionPicks picks;
   if (region.unsupportedArea > 0.0)
-    repairs = voxelRepairs(out.subtree, region.box, candidates, grid, inside, options.maxRepairs);
-  std::vector<std::pair<std::size_t, std::size_t>> picked;  // the repairs' candidates first
-  for (const Repair& r : repairs) {
+    picks.repairs =
+        voxelRepairs(subtree, region.box, in.candidates, in.grid, in.inside, in.options.maxRepairs);
+  std::vector<Fit>& picked = picks.fits;  // the repairs' candidates first
+  for (const Repair& r : picks.repairs) {
     if (std::none_of(picked.begin(), picked.end(),
                      [&](const auto& f) { return f.second == r.candidate; }))
       picked.push_back({0, r.candidate});
   }
   for (const auto& f : fits) {
-    if (picked.size() >= std::max(options.maxCandidates, repairs.size())) break;
+    if (picked.size() >= std::max(in.options.maxCandidates, picks.repairs.size())) break;
     if (std::none_of(picked.begin(), picked.end(),
                      [&](const auto& g) { return g.second == f.second; }))
       picked.push_back(f);
   }
-  fits = std::move(picked);
+  return picks;
+}
 
-  // The library: the subtree's primitives and the fitting candidates'.
+// The library: the subtree's primitives and the picked candidates'.
+PrimitiveLibrary regionLibrary(const CsgTree& subtree, const std::vector<Fit>& fits,
+                               std::span<const Candidate> candidates) {
   std::vector<Primitive> primitives;
   std::vector<std::string> names;
   const auto add = [&](const Node* leaf) {
@@ -304,54 +322,85 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
     primitives.push_back(leaf->primitive);
     names.push_back(leaf->name.empty() ? "p" + std::to_string(names.size()) : leaf->name);
   };
-  for (const Node* leaf : out.subtree.leaves()) add(leaf);
+  for (const Node* leaf : subtree.leaves()) add(leaf);
   for (const auto& [near, c] : fits)
     for (const Node* leaf : candidates[c].tree.leaves()) add(leaf);
-  const PrimitiveLibrary library(std::move(primitives), std::move(names));
+  return PrimitiveLibrary(std::move(primitives), std::move(names));
+}
 
-  // The points around the region and the labels there.
+// The scan's points in a box, with their normals.
+struct BoxPoints {
   std::vector<Vec3> points, normals;
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (!region.box.contains(scan.points[i])) continue;
-    points.push_back(scan.points[i]);
-    normals.push_back(scan.normals[i]);
-  }
-  const VoxelTarget target{grid, inside & voxelsIn(grid, region.box)};
-  const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
-  const FitnessModel model(points, normals, diagonal, library, options.fitness, t);
-  const std::optional<FitnessModel> rough =
-      roughModel(model, points, normals, options.roughPoints, seed);
+};
 
-  // Seeds: the subtree, and the subtree with one fitting candidate added or
-  // taken away.
-  const CsgTree subtree = library.adopt(out.subtree);
+// The points around the region.
+BoxPoints pointsIn(const PointCloud& scan, const Aabb& box) {
+  BoxPoints out;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!box.contains(scan.points[i])) continue;
+    out.points.push_back(scan.points[i]);
+    out.normals.push_back(scan.normals[i]);
+  }
+  return out;
+}
+
+// Seeds: the subtree (`original`, adopted by the library), the subtree with
+// each repair, and the subtree with one picked candidate added or taken away.
+std::vector<CsgTree> regionSeeds(const SearchInputs& in, const CsgTree& original,
+                                 const PrimitiveLibrary& library, const RegionPicks& picks) {
+  const CsgTree subtree = library.adopt(original);
   std::vector<CsgTree> seeds = {subtree};
-  const std::vector<const Node*> subtreeLeaves = out.subtree.leaves();
-  for (const Repair& r : repairs) {
-    CsgTree t = library.adopt(candidates[r.candidate].tree);
+  const std::vector<const Node*> subtreeLeaves = original.leaves();
+  for (const Repair& r : picks.repairs) {
+    CsgTree t = library.adopt(in.candidates[r.candidate].tree);
     if (r.leaf >= 0) {
       const CsgTree q = library.adopt(CsgTree::leaf(subtreeLeaves[std::size_t(r.leaf)]->primitive));
       t = r.intersect ? CsgTree::intersect({t, q}) : CsgTree::subtract({t, q});
     }
     seeds.push_back(r.cut ? CsgTree::subtract({subtree, t}) : CsgTree::unite({subtree, t}));
   }
-  for (const auto& [near, c] : fits) {
-    const CsgTree candidate = library.adopt(candidates[c].tree);
+  for (const auto& [near, c] : picks.fits) {
+    const CsgTree candidate = library.adopt(in.candidates[c].tree);
     seeds.push_back(CsgTree::unite({subtree, candidate}));
     seeds.push_back(CsgTree::subtract({subtree, candidate}));
-    if (seeds.size() + 2 > options.evolve.population) break;
+    if (seeds.size() + 2 > in.options.evolve.population) break;
   }
+  return seeds;
+}
+
+RegionSearch searchRegion(const SearchInputs& in, const Region& region, std::uint64_t seed,
+                          double timeLimit) {
+  const Clock::time_point start = Clock::now();
+  const HybridOptions& options = in.options;
+  RegionSearch out;
+  std::vector<CsgTree> chosen;
+  for (const std::size_t m : region.members) chosen.push_back(in.members[m]);
+  out.subtree = uniteAll(chosen);
+  const RegionPicks picks = pickCandidates(in, region, out.subtree);
+  const PrimitiveLibrary library = regionLibrary(out.subtree, picks.fits, in.candidates);
+
+  // The points around the region and the labels there.
+  const BoxPoints around = pointsIn(in.scan, region.box);
+  const VoxelTarget target{in.grid, in.inside & voxelsIn(in.grid, region.box)};
+  const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
+  const FitnessModel model(around.points, around.normals, in.scan.diagonal(), library,
+                           options.fitness, t);
+  const std::optional<FitnessModel> rough =
+      roughModel(model, around.points, around.normals, options.roughPoints, seed);
+
+  const CsgTree subtree = library.adopt(out.subtree);
   EvolveOptions eo = options.evolve;
   eo.seed = seed;
   eo.timeLimit = timeLimit;
   eo.variation.maxDepth = std::max(eo.variation.maxDepth, subtree.depth() + 3);
-  const EvolveResult r = evolve(model, seeds, eo, {}, rough ? &*rough : nullptr);
+  const EvolveResult r = evolve(model, regionSeeds(in, out.subtree, library, picks), eo, {},
+                                rough ? &*rough : nullptr);
   out.refined = r.best;
 
   HybridRegion& h = out.report;
   h.badPoints = region.bad.size();
   h.unsupportedArea = region.unsupportedArea;
-  h.points = points.size();
+  h.points = around.points.size();
   h.members = region.members.size();
   h.library = library.size();
   h.generations = r.generations;
@@ -470,12 +519,12 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   // with the best fitness on its points (the first of equals).
   const std::size_t searches = std::max<std::size_t>(options.searches, 1);
   std::vector<RegionSearch> runs(regions.size() * searches);
+  const SearchInputs in{scan, members, candidates, grid, inside, options};
   const double left = timeLimit > 0.0 ? std::max(timeLimit - secondsSince(start), 1e-3) : 0.0;
   tbb::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t j) {
     const std::size_t k = j / searches, s = j % searches;
     const std::uint64_t seed = mixSeed(options.evolve.seed, k);
-    runs[j] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
-                           s == 0 ? seed : mixSeed(seed, s), left);
+    runs[j] = searchRegion(in, regions[k], s == 0 ? seed : mixSeed(seed, s), left);
   });
   std::vector<RegionSearch> found(regions.size());
   for (std::size_t k = 0; k < regions.size(); ++k) {
