@@ -245,6 +245,155 @@ SummaryRow finishedRow(const BatchScan& scan, const BatchOptions& options, int s
   return row;
 }
 
+double secondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// A batch run: the scans, the options, the summary rows being written and
+// the counts, with the scans still to run and the jobs running.
+struct BatchRun {
+  const std::vector<BatchScan>& scans;
+  const BatchOptions& options;
+  SummaryWriter& summary;
+  BatchOutcome& outcome;
+  std::deque<std::size_t> pending{};  // scans to run, in order
+  int jobs = 1;                       // at once
+  int threads = 1;                    // per job
+  fs::path logs{};                    // the folder of the running jobs' stderr
+  std::map<pid_t, Running> running{};
+  int done = 0;    // scans done, skipped ones included
+  int ranNow = 0;  // scans this run finished
+
+  // --resume: finished outputs and recorded errors are done; a finished
+  // scan whose row a killed run did not write gets it now.
+  void queueScans(const std::map<std::string, nlohmann::json>& recorded) {
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const BatchScan& scan = scans[i];
+      if (!options.resume) {
+        pending.push_back(i);
+        continue;
+      }
+      const fs::path folder = options.outDir / scan.output;
+      const auto row = recorded.find(scan.label);
+      const std::string status =
+          row == recorded.end() ? "" : row->second.value("status", std::string());
+      if (complete(folder)) {
+        if (status != "ok") {
+          try {
+            summary.append(rowFromReport(folder / "report.json", scan.label, folder.string()));
+          } catch (const ParseError&) {
+            pending.push_back(i);  // not a finished job's report: run it again
+            continue;
+          }
+        }
+        ++outcome.skipped;
+      } else if (status == "error") {
+        ++outcome.skipped;
+        ++outcome.failedBefore;
+      } else {
+        pending.push_back(i);
+      }
+    }
+  }
+
+  // Largest files first: the longest jobs start early instead of running
+  // alone at the end (rows are written as scans finish in any case).
+  void sortLargestFirst() {
+    std::error_code ec;
+    std::vector<std::uintmax_t> sizes(scans.size(), 0);
+    for (const std::size_t i : pending) {
+      const std::uintmax_t size = fs::file_size(scans[i].file, ec);
+      sizes[i] = ec ? 0 : size;
+    }
+    std::stable_sort(pending.begin(), pending.end(),
+                     [&](std::size_t a, std::size_t b) { return sizes[a] > sizes[b]; });
+  }
+
+  // Start jobs while there are cores, and memory for more than one.
+  void startJobs() {
+    while (!gStop && !pending.empty() && int(running.size()) < jobs &&
+           (running.empty() || availableMemoryGiB() >= options.memoryPerJob)) {
+      const std::size_t i = pending.front();
+      pending.pop_front();
+      const fs::path log = logs / (std::to_string(i) + ".log");
+      const pid_t pid = spawnJob(options, scans[i], threads, log);
+      running[pid] = {i, log, std::chrono::steady_clock::now()};
+    }
+  }
+
+  // The job `pid` ended with `status`: its row is written and counted, unless
+  // the run is stopping.
+  void finishJob(pid_t pid, int status, const Progress& progress,
+                 std::chrono::steady_clock::time_point start) {
+    std::error_code ec;
+    const auto job = running.find(pid);
+    if (job == running.end()) return;
+    const Running r = job->second;
+    running.erase(job);
+    if (gStop) {
+      fs::remove(r.log, ec);
+      return;  // interrupted: no row, --resume runs it again
+    }
+    const SummaryRow row =
+        finishedRow(scans[r.index], options, status, secondsSince(r.start), r.log);
+    fs::remove(r.log, ec);
+    summary.append(row);
+    ++done;
+    ++ranNow;
+    if (row.status == RowStatus::Ok) {
+      ++outcome.ok;
+    } else {
+      ++outcome.failed;
+    }
+    progress.finished(row, done, outcome.failedBefore + outcome.failed, int(running.size()),
+                      secondsSince(start), ranNow);
+  }
+
+  // Runs the pending scans until all are done or a stop signal has ended
+  // the running ones.
+  void runJobs(const Progress& progress) {
+    const auto start = std::chrono::steady_clock::now();
+    bool stopping = false;
+    while (!pending.empty() || !running.empty()) {
+      if (gStop && !stopping) {
+        for (const auto& [p, r] : running) kill(p, SIGTERM);
+        stopping = true;
+      }
+      startJobs();
+      progress.update(done, outcome.failedBefore + outcome.failed, int(running.size()),
+                      secondsSince(start), ranNow);
+      if (gStop && running.empty()) break;
+      if (running.empty()) {
+        // Waiting for memory with nothing running cannot happen (one job
+        // always starts); guard against a busy loop anyway.
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        continue;
+      }
+      int status = 0;
+      // Without memory for another job, look again now and then.
+      const bool waitingForMemory = !pending.empty() && int(running.size()) < jobs;
+      const pid_t pid = waitpid(-1, &status, waitingForMemory ? WNOHANG : 0);
+      if (pid == 0) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        continue;
+      }
+      if (pid < 0) {
+        if (errno == ECHILD) break;
+        continue;  // EINTR: a stop signal, handled at the top
+      }
+      finishJob(pid, status, progress, start);
+    }
+  }
+
+  // Ends the running jobs and removes the logs, after a failure.
+  void abandon() {
+    std::error_code ec;
+    for (const auto& [p, r] : running) kill(p, SIGTERM);
+    for (const auto& [p, r] : running) waitpid(p, nullptr, 0);
+    fs::remove_all(logs, ec);
+  }
+};
+
 }  // namespace
 
 int batchJobs(int requested, double memoryPerJob) {
@@ -270,139 +419,38 @@ BatchOutcome runBatch(const std::vector<BatchScan>& scans, const BatchOptions& o
       options.resume ? readSummaryRows(summaryDir / "summary.jsonl")
                      : std::map<std::string, nlohmann::json>{};
   SummaryWriter summary(summaryDir, options.resume);
-
-  // --resume: finished outputs and recorded errors are done; a finished
-  // scan whose row a killed run did not write gets it now.
-  std::deque<std::size_t> pending;
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    const BatchScan& scan = scans[i];
-    if (!options.resume) {
-      pending.push_back(i);
-      continue;
-    }
-    const fs::path folder = options.outDir / scan.output;
-    const auto row = recorded.find(scan.label);
-    const std::string status =
-        row == recorded.end() ? "" : row->second.value("status", std::string());
-    if (complete(folder)) {
-      if (status != "ok") {
-        try {
-          summary.append(rowFromReport(folder / "report.json", scan.label, folder.string()));
-        } catch (const ParseError&) {
-          pending.push_back(i);  // not a finished job's report: run it again
-          continue;
-        }
-      }
-      ++outcome.skipped;
-    } else if (status == "error") {
-      ++outcome.skipped;
-      ++outcome.failedBefore;
-    } else {
-      pending.push_back(i);
-    }
-  }
-
-  // Largest files first: the longest jobs start early instead of running
-  // alone at the end (rows are written as scans finish in any case).
-  std::vector<std::uintmax_t> sizes(scans.size(), 0);
-  for (const std::size_t i : pending) {
-    const std::uintmax_t size = fs::file_size(scans[i].file, ec);
-    sizes[i] = ec ? 0 : size;
-  }
-  std::stable_sort(pending.begin(), pending.end(),
-                   [&](std::size_t a, std::size_t b) { return sizes[a] > sizes[b]; });
+  BatchRun run{scans, options, summary, outcome};
+  run.queueScans(recorded);
+  run.sortLargestFirst();
 
   const int total = int(scans.size());
-  const int jobs = std::min<int>(batchJobs(options.jobs, options.memoryPerJob),
-                                 std::max<std::size_t>(pending.size(), 1));
-  const int threads =
-      options.threadsPerJob > 0 ? options.threadsPerJob : std::max(1, usableCores() / jobs);
+  run.jobs = std::min<int>(batchJobs(options.jobs, options.memoryPerJob),
+                           std::max<std::size_t>(run.pending.size(), 1));
+  run.threads =
+      options.threadsPerJob > 0 ? options.threadsPerJob : std::max(1, usableCores() / run.jobs);
   if (options.resume && outcome.skipped > 0) {
     console.info("resume: " + std::to_string(outcome.skipped) + " of " + std::to_string(total) +
                  " scans already done");
   }
-  console.info(std::to_string(pending.size()) + (pending.size() == 1 ? " scan" : " scans") +
-               " to run, " + std::to_string(jobs) + " at once, " + std::to_string(threads) +
-               (threads == 1 ? " thread" : " threads") + " each");
+  console.info(std::to_string(run.pending.size()) + (run.pending.size() == 1 ? " scan" : " scans") +
+               " to run, " + std::to_string(run.jobs) + " at once, " + std::to_string(run.threads) +
+               (run.threads == 1 ? " thread" : " threads") + " each");
 
-  const fs::path logs = summaryDir / (".batch-logs-" + std::to_string(getpid()));
-  fs::create_directories(logs, ec);
-  if (ec) throw IoError(logs.string() + ": cannot be created: " + ec.message());
+  run.logs = summaryDir / (".batch-logs-" + std::to_string(getpid()));
+  fs::create_directories(run.logs, ec);
+  if (ec) throw IoError(run.logs.string() + ": cannot be created: " + ec.message());
 
-  const auto start = std::chrono::steady_clock::now();
-  const auto since = [](std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  };
   Progress progress(console, total);
-  std::map<pid_t, Running> running;
-  int done = outcome.skipped, ranNow = 0;
+  run.done = outcome.skipped;
   StopSignals signals;
-  bool stopping = false;
   try {
-    while (!pending.empty() || !running.empty()) {
-      if (gStop && !stopping) {
-        for (const auto& [p, r] : running) kill(p, SIGTERM);
-        stopping = true;
-      }
-      // Start jobs while there are cores, and memory for more than one.
-      while (!gStop && !pending.empty() && int(running.size()) < jobs &&
-             (running.empty() || availableMemoryGiB() >= options.memoryPerJob)) {
-        const std::size_t i = pending.front();
-        pending.pop_front();
-        const fs::path log = logs / (std::to_string(i) + ".log");
-        const pid_t pid = spawnJob(options, scans[i], threads, log);
-        running[pid] = {i, log, std::chrono::steady_clock::now()};
-      }
-      progress.update(done, outcome.failedBefore + outcome.failed, int(running.size()),
-                      since(start), ranNow);
-      if (gStop && running.empty()) break;
-      if (running.empty()) {
-        // Waiting for memory with nothing running cannot happen (one job
-        // always starts); guard against a busy loop anyway.
-        std::this_thread::sleep_for(std::chrono::milliseconds(200));
-        continue;
-      }
-      int status = 0;
-      // Without memory for another job, look again now and then.
-      const bool waitingForMemory = !pending.empty() && int(running.size()) < jobs;
-      const pid_t pid = waitpid(-1, &status, waitingForMemory ? WNOHANG : 0);
-      if (pid == 0) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(500));
-        continue;
-      }
-      if (pid < 0) {
-        if (errno == ECHILD) break;
-        continue;  // EINTR: a stop signal, handled at the top
-      }
-      const auto job = running.find(pid);
-      if (job == running.end()) continue;
-      const Running r = job->second;
-      running.erase(job);
-      if (gStop) {
-        fs::remove(r.log, ec);
-        continue;  // interrupted: no row, --resume runs it again
-      }
-      const SummaryRow row = finishedRow(scans[r.index], options, status, since(r.start), r.log);
-      fs::remove(r.log, ec);
-      summary.append(row);
-      ++done;
-      ++ranNow;
-      if (row.status == RowStatus::Ok) {
-        ++outcome.ok;
-      } else {
-        ++outcome.failed;
-      }
-      progress.finished(row, done, outcome.failedBefore + outcome.failed, int(running.size()),
-                        since(start), ranNow);
-    }
+    run.runJobs(progress);
   } catch (...) {
-    for (const auto& [p, r] : running) kill(p, SIGTERM);
-    for (const auto& [p, r] : running) waitpid(p, nullptr, 0);
-    fs::remove_all(logs, ec);
+    run.abandon();
     throw;
   }
   progress.end();
-  fs::remove_all(logs, ec);
+  fs::remove_all(run.logs, ec);
   outcome.interrupted = gStop != 0;
   return outcome;
 }

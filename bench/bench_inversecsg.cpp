@@ -398,10 +398,8 @@ int usage(const char* argv0) {
   return 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Options opt;
+// Reads the command line into `opt`; false when it is not valid.
+bool parseArguments(int argc, char** argv, Options& opt) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool hasValue = i + 1 < argc;
@@ -435,30 +433,20 @@ int main(int argc, char** argv) {
       try {
         opt.method = methodFromName(argv[++i]);
       } catch (const std::invalid_argument&) {
-        return usage(argv[0]);
+        return false;
       }
     } else if (!arg.empty() && arg[0] != '-' && opt.dir.empty()) {
       opt.dir = arg;
     } else {
-      return usage(argv[0]);
+      return false;
     }
   }
-  if (opt.dir.empty() || opt.points == 0 || opt.resolution <= 0 || opt.iouSamples <= 0 ||
-      opt.noise < 0.0 || opt.timeLimit < 0.0) {
-    return usage(argv[0]);
-  }
+  return !(opt.dir.empty() || opt.points == 0 || opt.resolution <= 0 || opt.iouSamples <= 0 ||
+           opt.noise < 0.0 || opt.timeLimit < 0.0);
+}
 
-  std::map<std::string, Reference> refs;
-  try {
-    refs = readReferences(opt.dir / "inversecsg-results.csv");
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  }
-  if (opt.models.empty()) {
-    for (const auto& [name, ref] : refs) opt.models.push_back(name);
-  }
-
+// The run's settings and the table's heading.
+void printHeading(const Options& opt) {
   char limitText[32] = "none";
   if (opt.timeLimit > 0.0) std::snprintf(limitText, sizeof limitText, "%g s", opt.timeLimit);
   std::printf(
@@ -478,32 +466,37 @@ int main(int argc, char** argv) {
   std::printf("load average at start: %.2f\n", loadAverage());
   std::printf("%-6s %6s %-13s %8s %5s %5s %5s %5s %7s  %s\n", "model", "faces", "status", "time_s",
               "prims", "ics_p", "ops", "ics_o", "IoU", "note");
+}
 
+// A model's row of the table: our result next to InverseCSG's `r`.
+void printRow(const std::string& model, const Reference& r, const Result& res) {
+  std::printf("%-6s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), r.faces,
+              res.status.c_str(), res.seconds, res.primitives, r.primitives, res.operations,
+              r.operations);
+  if (res.iou >= 0.0) {
+    std::printf("%7.4f", res.iou);
+  } else {
+    std::printf("%7s", "-");
+  }
+  std::printf("  %s\n", res.note.c_str());
+  std::fflush(stdout);
+}
+
+// The summary's counts over the models run.
+struct Tally {
   std::size_t ok = 0, withIou = 0, iou95 = 0, iou99 = 0, notLarger = 0;
   long ourPrims = 0, theirPrims = 0;
   std::vector<double> times, ious;
-  for (const std::string& model : opt.models) {
-    const auto ref = refs.find(model);
-    const Reference r = ref != refs.end() ? ref->second : Reference{};
-    const Result res = runIsolated(opt, model);
-    const bool isOk = res.status == "Ok";
-    std::printf("%-6s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), r.faces,
-                res.status.c_str(), res.seconds, res.primitives, r.primitives, res.operations,
-                r.operations);
-    if (res.iou >= 0.0) {
-      std::printf("%7.4f", res.iou);
-    } else {
-      std::printf("%7s", "-");
-    }
-    std::printf("  %s\n", res.note.c_str());
-    std::fflush(stdout);
 
+  // Counts a model's result `res` against InverseCSG's `r` (`known`: the
+  // CSV has the model).
+  void add(const Result& res, const Reference& r, bool known) {
     if (res.seconds >= 0.0) times.push_back(res.seconds);
-    if (!isOk) continue;
+    if (res.status != "Ok") return;
     ++ok;
     ourPrims += res.primitives;
     theirPrims += long(r.primitives);
-    if (ref != refs.end() && res.primitives <= long(r.primitives)) ++notLarger;
+    if (known && res.primitives <= long(r.primitives)) ++notLarger;
     if (res.iou >= 0.0) {
       ++withIou;
       ious.push_back(res.iou);
@@ -511,20 +504,53 @@ int main(int argc, char** argv) {
       iou99 += res.iou >= 0.99;
     }
   }
+};
 
+// The summary of the run.
+void printSummary(const Options& opt, const Tally& t) {
   const std::size_t n = opt.models.size();
   std::printf("\nsummary (%zu models, %zu points, noise %.4f D, res %d, method %s)\n", n,
               opt.points, opt.noise, opt.resolution, std::string(methodName(opt.method)).c_str());
-  std::printf("  reconstructed (Ok):            %zu / %zu\n", ok, n);
+  std::printf("  reconstructed (Ok):            %zu / %zu\n", t.ok, n);
   std::printf("  IoU measured:                  %zu (closed meshes among the reconstructed)\n",
-              withIou);
-  std::printf("  IoU >= 0.95:                   %zu / %zu\n", iou95, withIou);
-  std::printf("  IoU >= 0.99:                   %zu / %zu\n", iou99, withIou);
-  std::printf("  median IoU:                    %.4f\n", median(ious));
+              t.withIou);
+  std::printf("  IoU >= 0.95:                   %zu / %zu\n", t.iou95, t.withIou);
+  std::printf("  IoU >= 0.99:                   %zu / %zu\n", t.iou99, t.withIou);
+  std::printf("  median IoU:                    %.4f\n", median(t.ious));
   std::printf("  primitives <= InverseCSG's:    %zu / %zu (total %ld vs %ld over those models)\n",
-              notLarger, ok, ourPrims, theirPrims);
-  std::printf("  reconstruct time, median/max:  %.2f / %.2f s (%zu runs)\n", median(times),
-              times.empty() ? -1.0 : *std::max_element(times.begin(), times.end()), times.size());
+              t.notLarger, t.ok, t.ourPrims, t.theirPrims);
+  std::printf("  reconstruct time, median/max:  %.2f / %.2f s (%zu runs)\n", median(t.times),
+              t.times.empty() ? -1.0 : *std::max_element(t.times.begin(), t.times.end()),
+              t.times.size());
   std::printf("  load average at end:           %.2f\n", loadAverage());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  if (!parseArguments(argc, argv, opt)) return usage(argv[0]);
+
+  std::map<std::string, Reference> refs;
+  try {
+    refs = readReferences(opt.dir / "inversecsg-results.csv");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+  if (opt.models.empty()) {
+    for (const auto& [name, ref] : refs) opt.models.push_back(name);
+  }
+
+  printHeading(opt);
+  Tally tally;
+  for (const std::string& model : opt.models) {
+    const auto ref = refs.find(model);
+    const Reference r = ref != refs.end() ? ref->second : Reference{};
+    const Result res = runIsolated(opt, model);
+    printRow(model, r, res);
+    tally.add(res, r, ref != refs.end());
+  }
+  printSummary(opt, tally);
   return 0;
 }

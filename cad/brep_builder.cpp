@@ -332,29 +332,40 @@ Candidate unified(const Candidate& c) {
   return c;
 }
 
-}  // namespace
+// The volume test of a built solid: OpenCASCADE's booleans can return a
+// valid but wrong solid on nearly coincident or tangent faces, so its volume
+// must be the tree's (sampled in `box`; no test when the tolerance is 0).
+struct VolumeCheck {
+  const StepOptions& options;
+  Aabb box;
+  double sampled = 0.0;
 
-BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
-  tree.validate();
-  const Aabb extent = exportExtent(tree);
-  const double edge = options.halfSpaceScale * std::max(extent.diagonal(), 1e-9);
-  const Aabb box = extent.grown(0.01 * extent.diagonal());
-  const double sampled = options.volumeTolerance > 0.0 ? sampledVolume(tree, box, 48) : 0.0;
-  // OpenCASCADE's booleans can return a valid but wrong solid on nearly
-  // coincident or tangent faces: its volume must be the tree's.
-  auto agrees = [&](const Candidate& c) {
+  bool agrees(const Candidate& c) const {
     return options.volumeTolerance <= 0.0 ||
            volumesAgree(c.volume, sampled, box, options.volumeTolerance);
-  };
-  auto good = [&](const Candidate& c) { return c.valid && c.solids == 1 && agrees(c); };
+  }
+  // One valid solid of the tree's volume.
+  bool good(const Candidate& c) const { return c.valid && c.solids == 1 && agrees(c); }
+};
 
-  struct Built {
-    CsgTree tree;
-    Candidate solid;
-  };
-  std::vector<Built> tries;
-  std::optional<CadError> firstError;
-  auto attempt = [&](const CsgTree& t, double fuzzy) {
+// A tree tried and the solid built from it.
+struct Built {
+  CsgTree tree;
+  Candidate solid;
+};
+
+// The tries at building the tree's solid, and the first error of those that
+// built none.
+struct BrepAttempts {
+  const CsgTree& tree;
+  const StepOptions& options;
+  Aabb extent;
+  double edge = 0.0;  // of the cubes standing in for half-spaces
+  std::vector<Built> tries{};
+  std::optional<CadError> firstError{};
+
+  // Builds `t` with booleans of the given fuzziness.
+  void attempt(const CsgTree& t, double fuzzy) {
     const auto names = leafNames(t);
     StepOptions o = options;
     o.fuzzy = fuzzy;
@@ -372,93 +383,121 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
             CadError(std::string("OpenCASCADE cannot finish the solid: ") + e.GetMessageString());
       }
     }
-  };
-  auto done = [&] { return !tries.empty() && good(tries.back().solid); };
-  auto attemptSnapped = [&](bool torusTangents) {
+  }
+
+  // Builds the tree with its near-coincident caps snapped (and onto the
+  // planes tangent to its tori with `torusTangents`), when snapping moves any.
+  void attemptSnapped(bool torusTangents) {
     FaceSnapOptions snap;
     snap.tolerance = options.snapTolerance * extent.diagonal();
     snap.angle = options.snapAngle;
     snap.torusTangents = torusTangents;
     const FaceSnapResult snapped = snapFaces(tree, snap);
     if (snapped.movedCaps > 0 || snapped.turnedAxes > 0) attempt(snapped.tree, options.fuzzy);
+  }
+};
+
+// The first one solid of the right volume, else the first of several
+// solids of the right volume (written as they are: a sliver wider than
+// the snapping tolerance separates them in the tree itself); null: none.
+const Built* chooseSolid(const std::vector<Built>& tries, const VolumeCheck& check) {
+  for (const Built& t : tries) {
+    if (check.good(t.solid)) return &t;
+  }
+  for (const Built& t : tries) {
+    if (t.solid.valid && check.agrees(t.solid)) return &t;
+  }
+  return nullptr;
+}
+
+// The first operation (children before parents) whose solid disagrees with
+// the tree's, as the builder `b` describes it; the root when none does.
+std::string firstWrongOperation(const CsgTree& tree, const Builder& b, const Aabb& extent) {
+  std::string where = b.nodeText(*tree.root(), NodePath{});
+  std::function<bool(const Node&, NodePath&)> locate = [&](const Node& n, NodePath& p) {
+    if (n.kind == NodeKind::Primitive) return false;
+    for (std::size_t i = 0; i < n.children.size(); ++i) {
+      p.push_back(i);
+      const bool found = locate(*n.children[i], p);
+      p.pop_back();
+      if (found) return true;
+    }
+    const CsgTree sub(tree.nodeAt(p));
+    NodePath local;
+    const auto s = b.node(n, local);
+    const Aabb subBox = exportExtent(sub).grown(0.01 * extent.diagonal());
+    const double v = sampledVolume(sub, subBox, 48);
+    if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, b.options.volumeTolerance)) return false;
+    where = b.nodeText(n, p);
+    return true;
   };
+  NodePath p;
+  locate(*tree.root(), p);
+  return where;
+}
+
+// Throws the error of tries that gave no solid to choose: the first
+// error, or the solid that is invalid or of the wrong volume.
+[[noreturn]] void failBuild(const BrepAttempts& a, const VolumeCheck& check) {
+  if (a.tries.empty()) throw *a.firstError;
+  const auto names = leafNames(a.tree);
+  const Builder b{a.options, names, a.extent, a.edge};
+  if (check.agrees(a.tries.front().solid)) {
+    throw CadError("OpenCASCADE built an invalid solid for " +
+                   b.nodeText(*a.tree.root(), NodePath{}));
+  }
+  const std::string where = firstWrongOperation(a.tree, b, a.extent);
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), " (the part comes out with volume %.6g instead of %.6g)",
+                a.tries.front().solid.volume, check.sampled);
+  throw CadError("OpenCASCADE computed a wrong solid for " + where + buf);
+}
+
+// Names each face of the shape after the leaf of `tree` whose surface holds it.
+void nameFaces(BrepResult& result, const CsgTree& tree, double diagonal) {
+  const auto names = leafNames(tree);
+  BRepMesh_IncrementalMesh mesh(result.shape, 0.01 * diagonal, false, 0.5, false);
+  const std::vector<const Node*> leaves = tree.leaves();
+  for (TopExp_Explorer e(result.shape, TopAbs_FACE); e.More(); e.Next()) {
+    const Node* leaf = faceLeaf(TopoDS::Face(e.Current()), leaves, 1e-6 * diagonal);
+    if (leaf) result.faceNames.emplace_back(e.Current(), names.at(leaf));
+  }
+}
+
+}  // namespace
+
+BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
+  tree.validate();
+  const Aabb extent = exportExtent(tree);
+  const double edge = options.halfSpaceScale * std::max(extent.diagonal(), 1e-9);
+  const Aabb box = extent.grown(0.01 * extent.diagonal());
+  const VolumeCheck check{options, box,
+                          options.volumeTolerance > 0.0 ? sampledVolume(tree, box, 48) : 0.0};
+
+  BrepAttempts a{tree, options, extent, edge};
+  auto done = [&] { return !a.tries.empty() && check.good(a.tries.back().solid); };
   // The tree as it is; then, until one is a valid solid of the tree's
   // volume: its near-coincident caps snapped (pieces that a sliver of the
   // fit separates come together); the tree as it is with fuzzy booleans
   // (OpenCASCADE then classifies faces that nearly touch a torus right);
   // the caps snapped onto the planes tangent to the tori as well (where
   // they lie decides OpenCASCADE's result there).
-  attempt(tree, options.fuzzy);
-  if (!done() && options.snapTolerance > 0.0) attemptSnapped(false);
-  if (!done() && options.retryFuzzy > options.fuzzy) attempt(tree, options.retryFuzzy);
-  if (!done() && options.snapTolerance > 0.0) attemptSnapped(true);
-  // The first one solid of the right volume, else the first of several
-  // solids of the right volume (written as they are: a sliver wider than
-  // the snapping tolerance separates them in the tree itself).
-  const Built* chosen = nullptr;
-  for (const Built& t : tries) {
-    if (good(t.solid)) {
-      chosen = &t;
-      break;
-    }
-  }
-  for (std::size_t i = 0; !chosen && i < tries.size(); ++i) {
-    if (tries[i].solid.valid && agrees(tries[i].solid)) chosen = &tries[i];
-  }
-  if (!chosen) {
-    if (tries.empty()) throw *firstError;
-    const auto names = leafNames(tree);
-    const Builder b{options, names, extent, edge};
-    if (agrees(tries.front().solid)) {
-      throw CadError("OpenCASCADE built an invalid solid for " +
-                     b.nodeText(*tree.root(), NodePath{}));
-    }
-    // Name the first operation (children before parents) whose solid
-    // disagrees with the tree's.
-    std::string where = b.nodeText(*tree.root(), NodePath{});
-    std::function<bool(const Node&, NodePath&)> locate = [&](const Node& n, NodePath& p) {
-      if (n.kind == NodeKind::Primitive) return false;
-      for (std::size_t i = 0; i < n.children.size(); ++i) {
-        p.push_back(i);
-        const bool found = locate(*n.children[i], p);
-        p.pop_back();
-        if (found) return true;
-      }
-      const CsgTree sub(tree.nodeAt(p));
-      NodePath local;
-      const auto s = b.node(n, local);
-      const Aabb subBox = exportExtent(sub).grown(0.01 * extent.diagonal());
-      const double v = sampledVolume(sub, subBox, 48);
-      if (volumesAgree(s ? shapeVolume(*s) : 0.0, v, subBox, options.volumeTolerance)) return false;
-      where = b.nodeText(n, p);
-      return true;
-    };
-    NodePath p;
-    locate(*tree.root(), p);
-    char buf[160];
-    std::snprintf(buf, sizeof(buf), " (the part comes out with volume %.6g instead of %.6g)",
-                  tries.front().solid.volume, sampled);
-    throw CadError("OpenCASCADE computed a wrong solid for " + where + buf);
-  }
+  a.attempt(tree, options.fuzzy);
+  if (!done() && options.snapTolerance > 0.0) a.attemptSnapped(false);
+  if (!done() && options.retryFuzzy > options.fuzzy) a.attempt(tree, options.retryFuzzy);
+  if (!done() && options.snapTolerance > 0.0) a.attemptSnapped(true);
+  const Built* chosen = chooseSolid(a.tries, check);
+  if (!chosen) failBuild(a, check);
 
   BrepResult result;
   if (options.unifyFaces) {
     const Candidate merged = unified(chosen->solid);
-    result.shape = agrees(merged) ? merged.shape : chosen->solid.shape;
+    result.shape = check.agrees(merged) ? merged.shape : chosen->solid.shape;
   } else {
     result.shape = chosen->solid.shape;
   }
   try {
-    if (options.nameFaces) {
-      const auto names = leafNames(chosen->tree);
-      const double diagonal = extent.diagonal();
-      BRepMesh_IncrementalMesh mesh(result.shape, 0.01 * diagonal, false, 0.5, false);
-      const std::vector<const Node*> leaves = chosen->tree.leaves();
-      for (TopExp_Explorer e(result.shape, TopAbs_FACE); e.More(); e.Next()) {
-        const Node* leaf = faceLeaf(TopoDS::Face(e.Current()), leaves, 1e-6 * diagonal);
-        if (leaf) result.faceNames.emplace_back(e.Current(), names.at(leaf));
-      }
-    }
+    if (options.nameFaces) nameFaces(result, chosen->tree, extent.diagonal());
   } catch (const Standard_Failure& e) {
     throw CadError(std::string("OpenCASCADE cannot finish the solid: ") + e.GetMessageString());
   }

@@ -192,26 +192,8 @@ void checkBinaryData(std::istream& in, const PlyHeader& header, const std::strin
   }
 }
 
-}  // namespace
-
-const PlyProperty* PlyElement::find(std::string_view property) const {
-  for (const PlyProperty& p : properties) {
-    if (p.name == property) return &p;
-  }
-  return nullptr;
-}
-
-int plyTypeSize(std::string_view type) {
-  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if (type == "int" || type == "uint" || type == "int32" || type == "uint32") return 4;
-  if (type == "float" || type == "float32") return 4;
-  if (type == "double" || type == "float64") return 8;
-  return 0;
-}
-
-PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
-  PlyHeader header;
+/// Reads the first two lines, "ply" and the format line; the data's encoding.
+PlyData readPlyFormat(std::istream& in, const std::string& source) {
   std::string line;
   if (!readHeaderLine(in, line, source) || line.find_first_not_of(" \t") == std::string::npos ||
       splitWords(line).size() != 1 || splitWords(line)[0] != "ply") {
@@ -226,11 +208,39 @@ PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
                "garbled PLY header (the second line must be \"format ascii|binary_little_endian|"
                "binary_big_endian 1.0\")");
   }
-  header.data = format[1] == "ascii"                  ? PlyData::Ascii
-                : format[1] == "binary_little_endian" ? PlyData::LittleEndian
-                                                      : PlyData::BigEndian;
+  return format[1] == "ascii"                  ? PlyData::Ascii
+         : format[1] == "binary_little_endian" ? PlyData::LittleEndian
+                                               : PlyData::BigEndian;
+}
+
+/// The property a "property" header line (`line`, split into `words`) declares.
+PlyProperty parseProperty(const std::vector<std::string_view>& words, const std::string& line,
+                          const std::string& source) {
+  PlyProperty property;
+  if (words.size() == 5 && words[1] == "list") {
+    property = {std::string(words[4]), std::string(words[3]), std::string(words[2])};
+    const bool integralCount =
+        plyTypeSize(words[2]) != 0 && !isPlyFloat(words[2]) && plyTypeSize(words[2]) <= 4;
+    if (!integralCount || plyTypeSize(words[3]) == 0) {
+      parseError(source, "unsupported PLY list type in \"" + line + "\"");
+    }
+  } else if (words.size() == 3) {
+    property = {std::string(words[2]), std::string(words[1]), ""};
+    if (plyTypeSize(words[1]) == 0) {
+      parseError(source,
+                 "unsupported PLY property type \"" + property.type + "\" in \"" + line + "\"");
+    }
+  } else {
+    parseError(source, "garbled PLY header line \"" + line + "\"");
+  }
+  return property;
+}
+
+/// Reads the header's elements and properties up to and including
+/// end_header, counting its lines.
+void readPlyElements(std::istream& in, PlyHeader& header, const std::string& source) {
+  std::string line;
   bool ended = false;
-  header.headerLines = 2;
   while (readHeaderLine(in, line, source)) {
     ++header.headerLines;
     const std::vector<std::string_view> words = splitWords(line);
@@ -248,24 +258,7 @@ PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
     } else if (words[0] == "property") {
       if (header.elements.empty())
         parseError(source, "garbled PLY header (property before element)");
-      PlyProperty property;
-      if (words.size() == 5 && words[1] == "list") {
-        property = {std::string(words[4]), std::string(words[3]), std::string(words[2])};
-        const bool integralCount =
-            plyTypeSize(words[2]) != 0 && !isPlyFloat(words[2]) && plyTypeSize(words[2]) <= 4;
-        if (!integralCount || plyTypeSize(words[3]) == 0) {
-          parseError(source, "unsupported PLY list type in \"" + line + "\"");
-        }
-      } else if (words.size() == 3) {
-        property = {std::string(words[2]), std::string(words[1]), ""};
-        if (plyTypeSize(words[1]) == 0) {
-          parseError(source,
-                     "unsupported PLY property type \"" + property.type + "\" in \"" + line + "\"");
-        }
-      } else {
-        parseError(source, "garbled PLY header line \"" + line + "\"");
-      }
-      header.elements.back().properties.push_back(property);
+      header.elements.back().properties.push_back(parseProperty(words, line, source));
     } else {
       parseError(source, "garbled PLY header line \"" + line.substr(0, 60) + "\"");
     }
@@ -278,8 +271,11 @@ PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
                              std::to_string(element.count) + " rows but no properties)");
     }
   }
-  header.dataBytes = bytesLeft(in, source);
+}
 
+/// Finds the vertex and face elements and checks their properties: float
+/// x y z, all or none of float nx ny nz, and faces' vertex indices.
+void checkPlyVertices(PlyHeader& header, const std::string& source) {
   for (const PlyElement& element : header.elements) {
     if (!header.vertices && (element.name == "vertex" || element.name == "vertices")) {
       header.vertices = &element;
@@ -321,9 +317,11 @@ PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
       parseError(source, "PLY faces have no vertex_indices list of int or uint");
     }
   }
+}
 
-  // Minimum size of the data: fixed-size rows are exact, lists count as empty,
-  // ASCII values as one digit and a separator.
+/// Checks that the data is at least its minimum size: fixed-size rows are
+/// exact, lists count as empty, ASCII values as one digit and a separator.
+void checkPlyDataSize(const PlyHeader& header, const std::string& source) {
   std::uint64_t need = 0;
   for (const PlyElement& element : header.elements) {
     std::uint64_t row = 0;
@@ -338,13 +336,39 @@ PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
   }
   if (header.data == PlyData::Ascii && need > 0) --need;
   if (header.dataBytes < need) {
-    std::string declared = std::to_string(header.vertices->count) + " vertices";
-    if (header.faces) declared += " and " + std::to_string(header.faces->count) + " faces";
-    parseError(source, "truncated PLY file: the header declares " + declared +
+    parseError(source, "truncated PLY file: the header declares " + declaredCounts(header) +
                            ", which need at least " + std::to_string(need) +
                            " bytes of data, but only " + std::to_string(header.dataBytes) +
                            " bytes follow the header");
   }
+}
+
+}  // namespace
+
+const PlyProperty* PlyElement::find(std::string_view property) const {
+  for (const PlyProperty& p : properties) {
+    if (p.name == property) return &p;
+  }
+  return nullptr;
+}
+
+int plyTypeSize(std::string_view type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "int32" || type == "uint32") return 4;
+  if (type == "float" || type == "float32") return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+PlyHeader parsePlyHeader(std::istream& in, const std::string& source) {
+  PlyHeader header;
+  header.data = readPlyFormat(in, source);
+  header.headerLines = 2;
+  readPlyElements(in, header, source);
+  header.dataBytes = bytesLeft(in, source);
+  checkPlyVertices(header, source);
+  checkPlyDataSize(header, source);
   return header;
 }
 

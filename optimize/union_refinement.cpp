@@ -98,6 +98,263 @@ MemberRefs refsOf(const std::vector<UnionMember>& members) {
   return refs;
 }
 
+// The members of `refs`, copied.
+std::vector<UnionMember> copiesOf(const MemberRefs& refs) {
+  std::vector<UnionMember> kept;
+  for (const UnionMember* m : refs) kept.push_back(*m);
+  return kept;
+}
+
+// The nonzero words of each member's voxels.
+std::vector<std::vector<std::uint32_t>> nonzeroWords(std::span<const UnionMember> members) {
+  std::vector<std::vector<std::uint32_t>> nonzero;
+  for (const UnionMember& m : members) {
+    std::vector<std::uint32_t> words;
+    const auto v = m.voxels.words();
+    for (std::size_t w = 0; w < v.size(); ++w) {
+      if (v[w]) words.push_back(std::uint32_t(w));
+    }
+    nonzero.push_back(std::move(words));
+  }
+  return nonzero;
+}
+
+// The current union with each member left out, counted once for trying
+// every extra member against it.
+struct LeaveOneOut {
+  std::size_t count = 0;          // members of the union
+  std::size_t prims = 0;          // primitives of the whole union
+  std::vector<VoxelSet> without;  // [i]: the union without member i; [count]: the whole union
+  std::vector<std::pair<std::size_t, std::size_t>> withoutCounts;  // |without[i]|, its inside part
+  std::vector<std::vector<std::uint32_t>> differs;  // words where without[i] and the union differ
+};
+
+// The union of `members` with each member left out in turn, and its counts.
+LeaveOneOut leaveOneOut(const std::vector<UnionMember>& members, const VoxelSet& inside) {
+  LeaveOneOut l;
+  l.count = members.size();
+  for (const UnionMember& m : members) l.prims += memberPrimitives(m);
+  l.without.assign(l.count + 1, VoxelSet(inside.size()));
+  for (std::size_t i = 0; i <= l.count; ++i) {
+    for (std::size_t j = 0; j < l.count; ++j) {
+      if (j != i) l.without[i] |= members[j].voxels;
+    }
+  }
+  for (const VoxelSet& v : l.without) {
+    l.withoutCounts.emplace_back(v.count(), VoxelSet::countAnd(v, inside));
+  }
+  const auto u = l.without[l.count].words();
+  l.differs.resize(l.count);
+  for (std::size_t i = 0; i < l.count; ++i) {
+    const auto s = l.without[i].words();
+    for (std::size_t w = 0; w < s.size(); ++w) {
+      if (s[w] != u[w]) l.differs[i].push_back(std::uint32_t(w));
+    }
+  }
+  return l;
+}
+
+// The best new or replaced action of a round, over all members and candidates.
+struct BestAction {
+  double energy = 0.0;
+  std::size_t member = 0;
+  std::size_t slot = std::size_t(-1);  // -1: a new action, else the action replaced
+  SubtreeAction action;
+  bool found = false;
+};
+
+// One refineUnion search: the union under refinement, what it may take in,
+// and its current energy.
+struct UnionRefiner {
+  std::vector<UnionMember>& members;
+  std::span<const UnionMember> extra;
+  std::span<const DescriptionSet> d;
+  const VoxelSet& inside;
+  double cost;
+  std::size_t insideCount = inside.count();
+  double energy = refinementEnergy(members, inside, cost);
+  // The nonzero words of each extra member's voxels.
+  std::vector<std::vector<std::uint32_t>> extraWords = nonzeroWords(extra);
+
+  // Makes the trial the union when its energy, once pruned, is lower.
+  bool tryMove(MemberRefs trial, double e) {
+    e = pruneMembers(trial, inside, insideCount, cost, e);
+    if (e >= energy - 1e-9) return false;
+    members = copiesOf(trial);
+    energy = e;
+    return true;
+  }
+
+  // Removes the members whose removal lowers the energy, before any move.
+  void pruneCurrent() {
+    MemberRefs all = refsOf(members);
+    const double e = pruneMembers(all, inside, insideCount, cost, energy);
+    if (all.size() != members.size()) members = copiesOf(all);
+    energy = e;
+  }
+
+  // The current union with member i replaced by `changed`.
+  MemberRefs replaced(std::size_t i, const UnionMember& changed) const {
+    MemberRefs trial = refsOf(members);
+    trial[i] = &changed;
+    return trial;
+  }
+
+  // Drops one action of a member: the first drop that lowers the energy.
+  bool dropAction() {
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      for (std::size_t a = 0; a < members[i].actions.size(); ++a) {
+        UnionMember m = members[i];
+        m.actions.erase(m.actions.begin() + long(a));
+        m.voxels = memberVoxels(m, d);
+        const MemberRefs trial = replaced(i, m);
+        if (tryMove(trial, energyOf(trial, inside, cost))) return true;
+      }
+    }
+    return false;
+  }
+
+  // What extra[k]'s voxels add to `s` (its words) at word w, voxels and
+  // inside ones.
+  std::pair<std::int64_t, std::int64_t> added(std::span<const std::uint64_t> s, std::size_t k,
+                                              std::size_t w) const {
+    const auto in = inside.words();
+    const std::uint64_t v = extra[k].voxels.words()[w];
+    return std::pair{std::int64_t(std::popcount(s[w] | v) - std::popcount(s[w])),
+                     std::int64_t(std::popcount((s[w] | v) & in[w]) - std::popcount(s[w] & in[w]))};
+  }
+
+  // The counts of without[i] ∪ extra[k] (i = count: the whole union), from
+  // what extra[k] adds to the whole union (`toUnion`) and, where without[i]
+  // differs from it, the difference.
+  std::pair<std::size_t, std::size_t> countsWith(const LeaveOneOut& l,
+                                                 std::pair<std::int64_t, std::int64_t> toUnion,
+                                                 std::size_t i, std::size_t k) const {
+    auto [all, kept] = toUnion;
+    if (i < l.count) {
+      const auto u = l.without[l.count].words();
+      const auto s = l.without[i].words();
+      for (std::uint32_t w : l.differs[i]) {
+        const auto [a0, k0] = added(u, k, w);
+        const auto [a1, k1] = added(s, k, w);
+        all += a1 - a0;
+        kept += k1 - k0;
+      }
+    }
+    return std::pair{std::size_t(std::int64_t(l.withoutCounts[i].first) + all),
+                     std::size_t(std::int64_t(l.withoutCounts[i].second) + kept)};
+  }
+
+  // Tries extra[k] as a new member: the trial union and pruneMembers' first
+  // pass over it (the trial without each member) are counted from `l`, plus
+  // the words of extra[k]'s voxels.
+  bool tryExtra(const LeaveOneOut& l, std::size_t k) {
+    const bool present = std::any_of(members.begin(), members.end(), [&](const UnionMember& m) {
+      return m.root == extra[k].root && m.actions == extra[k].actions;
+    });
+    if (present || VoxelSet::countAnd(extra[k].voxels, inside) == 0) return false;
+    std::pair<std::int64_t, std::int64_t> toUnion{0, 0};
+    const auto u = l.without[l.count].words();
+    for (std::uint32_t w : extraWords[k]) {
+      const auto [a, b] = added(u, k, w);
+      toUnion.first += a;
+      toUnion.second += b;
+    }
+    const std::size_t withK = l.prims + memberPrimitives(extra[k]);
+    const auto [all, kept] = countsWith(l, toUnion, l.count, k);
+    const double e = energyOf(withK, all, kept, insideCount, cost);
+    MemberRefs trial = refsOf(members);
+    trial.push_back(&extra[k]);
+    // pruneMembers' first pass: the first member whose removal lowers e.
+    std::size_t first = trial.size();
+    double firstEnergy = e;
+    for (std::size_t i = 0; i < trial.size() && trial.size() > 1; ++i) {
+      double ei = 0.0;
+      if (i < l.count) {
+        const auto [a, b] = countsWith(l, toUnion, i, k);
+        ei = energyOf(withK - memberPrimitives(members[i]), a, b, insideCount, cost);
+      } else {
+        ei = energyOf(l.prims, l.withoutCounts[l.count].first, l.withoutCounts[l.count].second,
+                      insideCount, cost);
+      }
+      if (ei < e - 1e-9) {
+        first = i;
+        firstEnergy = ei;
+        break;
+      }
+    }
+    if (first == trial.size()) return e < energy - 1e-9 && tryMove(trial, e);
+    trial.erase(trial.begin() + long(first));
+    return tryMove(trial, firstEnergy);
+  }
+
+  // Adds one of `extra` as a member: the first that lowers the energy once
+  // pruned.
+  bool tryExtras() {
+    const LeaveOneOut l = leaveOneOut(members, inside);
+    for (std::size_t k = 0; k < extra.size(); ++k) {
+      if (tryExtra(l, k)) return true;
+    }
+    return false;
+  }
+
+  // Offers `best` every new action of member i and every replacement of one
+  // of its actions' candidates, for a union of `prims` primitives.
+  void offerActions(std::size_t i, std::size_t prims, BestAction& best) const {
+    const UnionMember& m = members[i];
+    VoxelSet rest(inside.size());
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      if (j != i) rest |= members[j].voxels;
+    }
+    // Tries `base` (the member's voxels without the changed slot) cut by
+    // candidate k, as the action in `slot`, with `count` primitives.
+    const auto tryAction = [&](const VoxelSet& base, std::size_t slot, std::uint32_t k,
+                               bool subtract, std::size_t count) {
+      const auto [all, kept] = cutCounts(base, d[k].voxels, subtract, rest, inside);
+      const double e = cost * double(count) + double(all + insideCount) - 2.0 * double(kept);
+      if (e < best.energy) best = BestAction{e, i, slot, SubtreeAction{k, subtract}, true};
+    };
+    for (std::uint32_t k = 0; k < d.size(); ++k) {
+      if (k == m.root || !VoxelSet::intersects(d[k].voxels, m.voxels)) continue;
+      for (const bool subtract : {true, false}) {
+        tryAction(m.voxels, std::size_t(-1), k, subtract, prims + 1);
+      }
+    }
+    // Or the best replacement of one action's candidate by another, with
+    // the same operation (a better fit of the same surface).
+    for (std::size_t a = 0; a < m.actions.size(); ++a) {
+      const SubtreeAction old = m.actions[a];
+      const VoxelSet without = memberVoxels(m, d, a);
+      for (std::uint32_t k = 0; k < d.size(); ++k) {
+        if (k == old.primitive || k == m.root || !VoxelSet::intersects(d[k].voxels, without)) {
+          continue;
+        }
+        tryAction(without, a, k, old.subtract, prims);
+      }
+    }
+  }
+
+  // Makes the best new or replaced action over all members and candidates,
+  // when it lowers the energy.
+  bool bestActionMove() {
+    std::size_t prims = 0;
+    for (const UnionMember& m : members) prims += memberPrimitives(m);
+    BestAction best;
+    best.energy = energy - 1e-9;
+    for (std::size_t i = 0; i < members.size(); ++i) offerActions(i, prims, best);
+    if (!best.found) return false;
+    UnionMember m = members[best.member];
+    if (best.slot == std::size_t(-1)) {
+      m.actions.push_back(best.action);
+    } else {
+      m.actions[best.slot] = best.action;
+    }
+    m.voxels = memberVoxels(m, d);
+    const MemberRefs trial = replaced(best.member, m);
+    return tryMove(trial, energyOf(trial, inside, cost));
+  }
+};
+
 }  // namespace
 
 double refinementEnergy(std::span<const UnionMember> members, const VoxelSet& inside, double cost) {
@@ -108,212 +365,10 @@ double refinementEnergy(std::span<const UnionMember> members, const VoxelSet& in
 
 void refineUnion(std::vector<UnionMember>& members, std::span<const UnionMember> extra,
                  std::span<const DescriptionSet> d, const VoxelSet& inside, double cost) {
-  const std::size_t insideCount = inside.count();
-  // Makes the trial the union when its energy, once pruned, is lower.
-  double energy = refinementEnergy(members, inside, cost);
-  const auto tryMove = [&](MemberRefs trial, double e) {
-    e = pruneMembers(trial, inside, insideCount, cost, e);
-    if (e >= energy - 1e-9) return false;
-    std::vector<UnionMember> kept;
-    for (const UnionMember* m : trial) kept.push_back(*m);
-    members = std::move(kept);
-    energy = e;
-    return true;
-  };
-  {
-    MemberRefs all = refsOf(members);
-    const double e = pruneMembers(all, inside, insideCount, cost, energy);
-    if (all.size() != members.size()) {
-      std::vector<UnionMember> kept;
-      for (const UnionMember* m : all) kept.push_back(*m);
-      members = std::move(kept);
-    }
-    energy = e;
-  }
-  // The current union with member i replaced by `changed`.
-  const auto replaced = [&](std::size_t i, const UnionMember& changed) {
-    MemberRefs trial = refsOf(members);
-    trial[i] = &changed;
-    return trial;
-  };
-  // Nonzero words of each extra member's voxels.
-  std::vector<std::vector<std::uint32_t>> extraWords;
-  for (const UnionMember& m : extra) {
-    std::vector<std::uint32_t> words;
-    const auto v = m.voxels.words();
-    for (std::size_t w = 0; w < v.size(); ++w) {
-      if (v[w]) words.push_back(std::uint32_t(w));
-    }
-    extraWords.push_back(std::move(words));
-  }
-  // Adds one of `extra` as a member: the first that lowers the energy once
-  // pruned. The trial union and the first pruning pass over it (the trial
-  // without each member) are counted from the union without each member,
-  // computed once, plus the words of the extra member's voxels.
-  const auto tryExtras = [&]() {
-    const std::size_t count = members.size();
-    std::size_t prims = 0;
-    for (const UnionMember& m : members) prims += memberPrimitives(m);
-    std::vector<VoxelSet> without(count + 1,
-                                  VoxelSet(inside.size()));  // [count]: no member left out
-    for (std::size_t i = 0; i <= count; ++i) {
-      for (std::size_t j = 0; j < count; ++j) {
-        if (j != i) without[i] |= members[j].voxels;
-      }
-    }
-    std::vector<std::pair<std::size_t, std::size_t>> withoutCounts;
-    for (const VoxelSet& v : without) {
-      withoutCounts.emplace_back(v.count(), VoxelSet::countAnd(v, inside));
-    }
-    const auto in = inside.words();
-    const auto u = without[count].words();
-    // Words where the union without member i differs from the whole union.
-    std::vector<std::vector<std::uint32_t>> differs(count);
-    for (std::size_t i = 0; i < count; ++i) {
-      const auto s = without[i].words();
-      for (std::size_t w = 0; w < s.size(); ++w) {
-        if (s[w] != u[w]) differs[i].push_back(std::uint32_t(w));
-      }
-    }
-    // What extra[k]'s voxels add to `s` (its words), voxels and inside ones.
-    const auto added = [&](std::span<const std::uint64_t> s, std::size_t k, std::size_t w) {
-      const std::uint64_t v = extra[k].voxels.words()[w];
-      return std::pair{
-          std::int64_t(std::popcount(s[w] | v) - std::popcount(s[w])),
-          std::int64_t(std::popcount((s[w] | v) & in[w]) - std::popcount(s[w] & in[w]))};
-    };
-    // The counts of without[i] ∪ extra[k] (i = count: the whole union), from
-    // what extra[k] adds to the whole union and, where without[i] differs
-    // from it, the difference.
-    std::vector<std::pair<std::int64_t, std::int64_t>> toUnion(extra.size());
-    const auto countsWith = [&](std::size_t i, std::size_t k) {
-      auto [all, kept] = toUnion[k];
-      if (i < count) {
-        const auto s = without[i].words();
-        for (std::uint32_t w : differs[i]) {
-          const auto [a0, k0] = added(u, k, w);
-          const auto [a1, k1] = added(s, k, w);
-          all += a1 - a0;
-          kept += k1 - k0;
-        }
-      }
-      return std::pair{std::size_t(std::int64_t(withoutCounts[i].first) + all),
-                       std::size_t(std::int64_t(withoutCounts[i].second) + kept)};
-    };
-    for (std::size_t k = 0; k < extra.size(); ++k) {
-      const bool present = std::any_of(members.begin(), members.end(), [&](const UnionMember& m) {
-        return m.root == extra[k].root && m.actions == extra[k].actions;
-      });
-      if (present || VoxelSet::countAnd(extra[k].voxels, inside) == 0) continue;
-      toUnion[k] = {0, 0};
-      for (std::uint32_t w : extraWords[k]) {
-        const auto [a, b] = added(u, k, w);
-        toUnion[k].first += a;
-        toUnion[k].second += b;
-      }
-      const std::size_t withK = prims + memberPrimitives(extra[k]);
-      const auto [all, kept] = countsWith(count, k);
-      const double e = energyOf(withK, all, kept, insideCount, cost);
-      MemberRefs trial = refsOf(members);
-      trial.push_back(&extra[k]);
-      // pruneMembers' first pass: the first member whose removal lowers e.
-      std::size_t first = trial.size();
-      double firstEnergy = e;
-      for (std::size_t i = 0; i < trial.size() && trial.size() > 1; ++i) {
-        double ei = 0.0;
-        if (i < count) {
-          const auto [a, b] = countsWith(i, k);
-          ei = energyOf(withK - memberPrimitives(members[i]), a, b, insideCount, cost);
-        } else {
-          ei = energyOf(prims, withoutCounts[count].first, withoutCounts[count].second, insideCount,
-                        cost);
-        }
-        if (ei < e - 1e-9) {
-          first = i;
-          firstEnergy = ei;
-          break;
-        }
-      }
-      if (first == trial.size()) {
-        if (e < energy - 1e-9 && tryMove(trial, e)) return true;
-        continue;
-      }
-      trial.erase(trial.begin() + long(first));
-      if (tryMove(trial, firstEnergy)) return true;
-    }
-    return false;
-  };
+  UnionRefiner r{members, extra, d, inside, cost};
+  r.pruneCurrent();
   for (bool improved = true; improved;) {
-    improved = false;
-    for (std::size_t i = 0; i < members.size() && !improved; ++i) {
-      for (std::size_t a = 0; a < members[i].actions.size() && !improved; ++a) {
-        UnionMember m = members[i];
-        m.actions.erase(m.actions.begin() + long(a));
-        m.voxels = memberVoxels(m, d);
-        const MemberRefs trial = replaced(i, m);
-        improved = tryMove(trial, energyOf(trial, inside, cost));
-      }
-    }
-    if (!improved) improved = tryExtras();
-    if (improved) continue;
-    // The best new or replaced action over all members and candidates.
-    std::size_t prims = 0;
-    for (const UnionMember& m : members) prims += memberPrimitives(m);
-    double bestEnergy = energy - 1e-9;
-    std::size_t bestUnionMember = 0;
-    std::size_t bestSlot = std::size_t(-1);  // -1: a new action, else the action replaced
-    SubtreeAction bestAction;
-    bool found = false;
-    for (std::size_t i = 0; i < members.size(); ++i) {
-      const UnionMember& m = members[i];
-      VoxelSet rest(inside.size());
-      for (std::size_t j = 0; j < members.size(); ++j) {
-        if (j != i) rest |= members[j].voxels;
-      }
-      // Tries `base` (the member's voxels without the changed slot) cut by
-      // candidate k, as the action in `slot`, with `count` primitives.
-      const auto tryAction = [&](const VoxelSet& base, std::size_t slot, std::uint32_t k,
-                                 bool subtract, std::size_t count) {
-        const auto [all, kept] = cutCounts(base, d[k].voxels, subtract, rest, inside);
-        const double e = cost * double(count) + double(all + insideCount) - 2.0 * double(kept);
-        if (e < bestEnergy) {
-          bestEnergy = e;
-          bestUnionMember = i;
-          bestSlot = slot;
-          bestAction = SubtreeAction{k, subtract};
-          found = true;
-        }
-      };
-      for (std::uint32_t k = 0; k < d.size(); ++k) {
-        if (k == m.root || !VoxelSet::intersects(d[k].voxels, m.voxels)) continue;
-        for (const bool subtract : {true, false}) {
-          tryAction(m.voxels, std::size_t(-1), k, subtract, prims + 1);
-        }
-      }
-      // Or the best replacement of one action's candidate by another, with
-      // the same operation (a better fit of the same surface).
-      for (std::size_t a = 0; a < m.actions.size(); ++a) {
-        const SubtreeAction old = m.actions[a];
-        const VoxelSet without = memberVoxels(m, d, a);
-        for (std::uint32_t k = 0; k < d.size(); ++k) {
-          if (k == old.primitive || k == m.root || !VoxelSet::intersects(d[k].voxels, without)) {
-            continue;
-          }
-          tryAction(without, a, k, old.subtract, prims);
-        }
-      }
-    }
-    if (found) {
-      UnionMember m = members[bestUnionMember];
-      if (bestSlot == std::size_t(-1)) {
-        m.actions.push_back(bestAction);
-      } else {
-        m.actions[bestSlot] = bestAction;
-      }
-      m.voxels = memberVoxels(m, d);
-      const MemberRefs trial = replaced(bestUnionMember, m);
-      improved = tryMove(trial, energyOf(trial, inside, cost));
-    }
+    improved = r.dropAction() || r.tryExtras() || r.bestActionMove();
   }
 }
 

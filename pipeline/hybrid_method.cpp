@@ -237,30 +237,33 @@ struct RegionSearch {
   CsgTree refined;  // the search's best tree
 };
 
-RegionSearch searchRegion(const PointCloud& scan, const Region& region,
-                          const std::vector<CsgTree>& members,
-                          std::span<const Candidate> candidates, const VoxelGrid& grid,
-                          const VoxelSet& inside, const HybridOptions& options, std::uint64_t seed,
-                          const RunControl& control) {
-  const Clock::time_point start = Clock::now();
-  const double diagonal = scan.diagonal();
-  const double tolerance = options.fitness.distanceTolerance * diagonal;
-  RegionSearch out;
-  std::vector<CsgTree> chosen;
-  for (const std::size_t m : region.members) chosen.push_back(members[m]);
-  out.subtree = uniteAll(chosen);
+// What every region's search reads: the scan, the tree's union members, the
+// candidates and the voxel labels.
+struct SearchInputs {
+  const PointCloud& scan;
+  const std::vector<CsgTree>& members;
+  std::span<const Candidate> candidates;
+  const VoxelGrid& grid;
+  const VoxelSet& inside;
+  const HybridOptions& options;
+};
 
-  // The candidates that fit the region: in its box, and with a surface near
-  // many of its bad points; best supported first.
-  std::vector<std::pair<std::size_t, std::size_t>> fits;  // (bad points near it, candidate)
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    const CsgTree& t = candidates[c].tree;
+// A candidate that fits a region: (bad points near it, candidate).
+using Fit = std::pair<std::size_t, std::size_t>;
+
+// The candidates that fit the region: in its box, and with a surface near
+// many of its bad points; best supported first, options.maxCandidates at most.
+std::vector<Fit> fittingCandidates(const SearchInputs& in, const Region& region) {
+  const double tolerance = in.options.fitness.distanceTolerance * in.scan.diagonal();
+  std::vector<Fit> fits;
+  for (std::size_t c = 0; c < in.candidates.size(); ++c) {
+    const CsgTree& t = in.candidates[c].tree;
     if (!meets(t.bounds(), region.box)) continue;
     const std::vector<const Node*> leaves = t.leaves();
     std::size_t near = 0;
     for (const std::uint32_t i : region.bad) {
       for (const Node* leaf : leaves) {
-        if (std::abs(leaf->primitive.value(scan.points[i])) <= 2.0 * tolerance) {
+        if (std::abs(leaf->primitive.value(in.scan.points[i])) <= 2.0 * tolerance) {
           ++near;
           break;
         }
@@ -270,32 +273,47 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   }
   std::stable_sort(fits.begin(), fits.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
-  if (fits.size() > options.maxCandidates) fits.resize(options.maxCandidates);
+  if (fits.size() > in.options.maxCandidates) fits.resize(in.options.maxCandidates);
+  return fits;
+}
 
-  // Where the subtree holds material no point bounds (or leaves a hole no
-  // point bounds), the repairs that would set its voxels right there: a
-  // candidate c, c − q or c ∩ q (q one of the subtree's primitives) taken
-  // away or added, scored by the region's voxels it sets right against the
-  // labels less those it sets wrong. The best become seeds, their
-  // candidates join the library.
+// What a region's search starts from besides its subtree: the voxel repairs
+// and the candidates (the repairs' first, then the fitting ones).
+struct RegionPicks {
   std::vector<Repair> repairs;
+  std::vector<Fit> fits;
+};
+
+// Where the subtree holds material no point bounds (or leaves a hole no
+// point bounds), the repairs that would set its voxels right there: a
+// candidate c, c − q or c ∩ q (q one of the subtree's primitives) taken
+// away or added, scored by the region's voxels it sets right against the
+// labels less those it sets wrong. The best become seeds, their
+// candidates join the library.
+RegionPicks pickCandidates(const SearchInputs& in, const Region& region, const CsgTree& subtree) {
+  const std::vector<Fit> fits = fittingCandidates(in, region);
+  RegionPicks picks;
   if (region.unsupportedArea > 0.0)
-    repairs = voxelRepairs(out.subtree, region.box, candidates, grid, inside, options.maxRepairs);
-  std::vector<std::pair<std::size_t, std::size_t>> picked;  // the repairs' candidates first
-  for (const Repair& r : repairs) {
+    picks.repairs =
+        voxelRepairs(subtree, region.box, in.candidates, in.grid, in.inside, in.options.maxRepairs);
+  std::vector<Fit>& picked = picks.fits;  // the repairs' candidates first
+  for (const Repair& r : picks.repairs) {
     if (std::none_of(picked.begin(), picked.end(),
                      [&](const auto& f) { return f.second == r.candidate; }))
       picked.push_back({0, r.candidate});
   }
   for (const auto& f : fits) {
-    if (picked.size() >= std::max(options.maxCandidates, repairs.size())) break;
+    if (picked.size() >= std::max(in.options.maxCandidates, picks.repairs.size())) break;
     if (std::none_of(picked.begin(), picked.end(),
                      [&](const auto& g) { return g.second == f.second; }))
       picked.push_back(f);
   }
-  fits = std::move(picked);
+  return picks;
+}
 
-  // The library: the subtree's primitives and the fitting candidates'.
+// The library: the subtree's primitives and the picked candidates'.
+PrimitiveLibrary regionLibrary(const CsgTree& subtree, const std::vector<Fit>& fits,
+                               std::span<const Candidate> candidates) {
   std::vector<Primitive> primitives;
   std::vector<std::string> names;
   const auto add = [&](const Node* leaf) {
@@ -304,54 +322,85 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
     primitives.push_back(leaf->primitive);
     names.push_back(leaf->name.empty() ? "p" + std::to_string(names.size()) : leaf->name);
   };
-  for (const Node* leaf : out.subtree.leaves()) add(leaf);
+  for (const Node* leaf : subtree.leaves()) add(leaf);
   for (const auto& [near, c] : fits)
     for (const Node* leaf : candidates[c].tree.leaves()) add(leaf);
-  const PrimitiveLibrary library(std::move(primitives), std::move(names));
+  return PrimitiveLibrary(std::move(primitives), std::move(names));
+}
 
-  // The points around the region and the labels there.
+// The scan's points in a box, with their normals.
+struct BoxPoints {
   std::vector<Vec3> points, normals;
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (!region.box.contains(scan.points[i])) continue;
-    points.push_back(scan.points[i]);
-    normals.push_back(scan.normals[i]);
-  }
-  const VoxelTarget target{grid, inside & voxelsIn(grid, region.box)};
-  const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
-  const FitnessModel model(points, normals, diagonal, library, options.fitness, t);
-  const std::optional<FitnessModel> rough =
-      roughModel(model, points, normals, options.roughPoints, seed);
+};
 
-  // Seeds: the subtree, and the subtree with one fitting candidate added or
-  // taken away.
-  const CsgTree subtree = library.adopt(out.subtree);
+// The points around the region.
+BoxPoints pointsIn(const PointCloud& scan, const Aabb& box) {
+  BoxPoints out;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!box.contains(scan.points[i])) continue;
+    out.points.push_back(scan.points[i]);
+    out.normals.push_back(scan.normals[i]);
+  }
+  return out;
+}
+
+// Seeds: the subtree (`original`, adopted by the library), the subtree with
+// each repair, and the subtree with one picked candidate added or taken away.
+std::vector<CsgTree> regionSeeds(const SearchInputs& in, const CsgTree& original,
+                                 const PrimitiveLibrary& library, const RegionPicks& picks) {
+  const CsgTree subtree = library.adopt(original);
   std::vector<CsgTree> seeds = {subtree};
-  const std::vector<const Node*> subtreeLeaves = out.subtree.leaves();
-  for (const Repair& r : repairs) {
-    CsgTree t = library.adopt(candidates[r.candidate].tree);
+  const std::vector<const Node*> subtreeLeaves = original.leaves();
+  for (const Repair& r : picks.repairs) {
+    CsgTree t = library.adopt(in.candidates[r.candidate].tree);
     if (r.leaf >= 0) {
       const CsgTree q = library.adopt(CsgTree::leaf(subtreeLeaves[std::size_t(r.leaf)]->primitive));
       t = r.intersect ? CsgTree::intersect({t, q}) : CsgTree::subtract({t, q});
     }
     seeds.push_back(r.cut ? CsgTree::subtract({subtree, t}) : CsgTree::unite({subtree, t}));
   }
-  for (const auto& [near, c] : fits) {
-    const CsgTree candidate = library.adopt(candidates[c].tree);
+  for (const auto& [near, c] : picks.fits) {
+    const CsgTree candidate = library.adopt(in.candidates[c].tree);
     seeds.push_back(CsgTree::unite({subtree, candidate}));
     seeds.push_back(CsgTree::subtract({subtree, candidate}));
-    if (seeds.size() + 2 > options.evolve.population) break;
+    if (seeds.size() + 2 > in.options.evolve.population) break;
   }
+  return seeds;
+}
+
+RegionSearch searchRegion(const SearchInputs& in, const Region& region, std::uint64_t seed,
+                          const RunControl& control) {
+  const Clock::time_point start = Clock::now();
+  const HybridOptions& options = in.options;
+  RegionSearch out;
+  std::vector<CsgTree> chosen;
+  for (const std::size_t m : region.members) chosen.push_back(in.members[m]);
+  out.subtree = uniteAll(chosen);
+  const RegionPicks picks = pickCandidates(in, region, out.subtree);
+  const PrimitiveLibrary library = regionLibrary(out.subtree, picks.fits, in.candidates);
+
+  // The points around the region and the labels there.
+  const BoxPoints around = pointsIn(in.scan, region.box);
+  const VoxelTarget target{in.grid, in.inside & voxelsIn(in.grid, region.box)};
+  const VoxelTarget* t = options.fitness.voxelWeight > 0.0 ? &target : nullptr;
+  const FitnessModel model(around.points, around.normals, in.scan.diagonal(), library,
+                           options.fitness, t);
+  const std::optional<FitnessModel> rough =
+      roughModel(model, around.points, around.normals, options.roughPoints, seed);
+
+  const CsgTree subtree = library.adopt(out.subtree);
   EvolveOptions eo = options.evolve;
   eo.seed = seed;
   eo.control = control;
   eo.variation.maxDepth = std::max(eo.variation.maxDepth, subtree.depth() + 3);
-  const EvolveResult r = evolve(model, seeds, eo, {}, rough ? &*rough : nullptr);
+  const EvolveResult r = evolve(model, regionSeeds(in, out.subtree, library, picks), eo, {},
+                                rough ? &*rough : nullptr);
   out.refined = r.best;
 
   HybridRegion& h = out.report;
   h.badPoints = region.bad.size();
   h.unsupportedArea = region.unsupportedArea;
-  h.points = points.size();
+  h.points = around.points.size();
   h.members = region.members.size();
   h.library = library.size();
   h.generations = r.generations;
@@ -361,6 +410,186 @@ RegionSearch searchRegion(const PointCloud& scan, const Region& region,
   h.primitivesAfter = r.best.primitiveCount();
   h.seconds = secondsSince(start);
   return out;
+}
+
+// The regions' searches, `searches` of each with seeds of their own, all in
+// parallel; each is deterministic for its seed. A region keeps the search
+// with the best fitness on its points (the first of equals).
+std::vector<RegionSearch> searchRegions(const SearchInputs& in, const std::vector<Region>& regions,
+                                        const RunControl& control) {
+  const std::size_t searches = std::max<std::size_t>(in.options.searches, 1);
+  std::vector<RegionSearch> runs(regions.size() * searches);
+  tbb::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t j) {
+    const std::size_t k = j / searches, s = j % searches;
+    const std::uint64_t seed = mixSeed(in.options.evolve.seed, k);
+    runs[j] = searchRegion(in, regions[k], s == 0 ? seed : mixSeed(seed, s), control);
+  });
+  std::vector<RegionSearch> found(regions.size());
+  for (std::size_t k = 0; k < regions.size(); ++k) {
+    HybridRegion all;  // every search's fitness, and their time
+    for (std::size_t j = k * searches; j < (k + 1) * searches; ++j) {
+      all.searchFitness.push_back(runs[j].report.localAfter);
+      all.seconds += runs[j].report.seconds;
+    }
+    found[k] = std::move(runs[k * searches + all.search()]);
+    found[k].report.searchFitness = std::move(all.searchFitness);
+    found[k].report.seconds = all.seconds;
+  }
+  return found;
+}
+
+// How regions are cut: the members' bounds grown by the margin, the margin
+// and cell size (scan units) and the least bad points of a region.
+struct RegionLayout {
+  std::vector<Aabb> memberBounds;
+  double margin = 0.0;
+  double cell = 0.0;
+  std::size_t least = 0;
+};
+
+// The layout of the regions around `members` for a scan of `points` points.
+RegionLayout regionLayout(const std::vector<CsgTree>& members, std::size_t points,
+                          const HybridOptions& options, double voxel) {
+  RegionLayout layout;
+  layout.margin = options.margin * voxel;
+  layout.cell = options.regionCell * voxel;
+  for (const CsgTree& m : members) layout.memberBounds.push_back(m.bounds().grown(layout.margin));
+  layout.least =
+      std::max<std::size_t>(10, std::size_t(std::ceil(options.minRegionPoints * double(points))));
+  return layout;
+}
+
+// Regions of bad points, each with the members of the tree around it.
+std::vector<Region> badPointRegions(const PointCloud& scan, std::span<const std::uint32_t> bad,
+                                    const RegionLayout& layout) {
+  std::vector<Region> regions;
+  for (std::vector<std::uint32_t>& points : pointRegions(scan.points, bad, layout.cell)) {
+    if (points.size() < layout.least) continue;
+    Region r;
+    for (const std::uint32_t i : points) r.box.extend(scan.points[i]);
+    r.box = r.box.grown(layout.margin);
+    r.bad = std::move(points);
+    selectMembers(r, layout.memberBounds);
+    regions.push_back(std::move(r));
+  }
+  return regions;
+}
+
+// The support of a tree's boundary by the scan's points (none when the tree
+// cannot be sampled), the points' search built on first use.
+struct SupportMeter {
+  const PointCloud& scan;
+  SupportOptions options;
+  std::optional<NearestNeighbors> nearest{};
+
+  std::optional<SurfaceSupport> operator()(const CsgTree& t, bool keep) {
+    if (!nearest) nearest.emplace(scan.points);
+    SupportOptions o = options;
+    o.keepUnsupported = keep;
+    try {
+      return surfaceSupport(t, *nearest, o);
+    } catch (const std::invalid_argument&) {
+      return std::nullopt;
+    }
+  }
+};
+
+// The regions of the input tree's unsupported boundary, `support` kept with
+// its samples. On a sparse scan, random gaps between points are wider than
+// εd: only samples farther than a few mean spacings from every point form
+// regions.
+std::vector<Region> unsupportedRegions(const SurfaceSupport& support, const SupportMeter& meter,
+                                       const HybridOptions& options, const RegionLayout& layout) {
+  const double density = double(meter.scan.size()) / support.area;
+  const double far = std::max(meter.options.distance, options.supportSpacing / std::sqrt(density));
+  std::vector<Vec3> samples;
+  for (std::size_t i = 0; i < support.unsupportedSamples.size(); ++i)
+    if (support.unsupportedDistances[i] > far) samples.push_back(support.unsupportedSamples[i]);
+  return boundaryRegions(samples, support.sampleArea, density, double(layout.least), layout.cell,
+                         layout.margin, layout.memberBounds);
+}
+
+// Each member's region (-1: none).
+std::vector<std::ptrdiff_t> memberRegions(std::size_t members, const std::vector<Region>& regions) {
+  std::vector<std::ptrdiff_t> regionOf(members, -1);
+  for (std::size_t k = 0; k < regions.size(); ++k)
+    for (const std::size_t m : regions[k].members) regionOf[m] = std::ptrdiff_t(k);
+  return regionOf;
+}
+
+// The regions' refined subtrees and which of them the tree has taken.
+struct Assembly {
+  const std::vector<CsgTree>& members;
+  const std::vector<Region>& regions;
+  const std::vector<RegionSearch>& found;
+  std::vector<std::ptrdiff_t> regionOf = memberRegions(members.size(), regions);
+  std::vector<char> accepted = std::vector<char>(found.size(), 0);
+
+  // The tree with the refined subtrees of the accepted regions and of
+  // region `trial` in place of their members (regions are disjoint in
+  // members; a region's refined subtree takes its first member's place).
+  CsgTree operator()(std::ptrdiff_t trial) const {
+    std::vector<CsgTree> parts;
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      const std::ptrdiff_t k = regionOf[m];
+      if (k < 0 || (!accepted[std::size_t(k)] && k != trial)) {
+        parts.push_back(members[m]);
+      } else if (m == regions[std::size_t(k)].members.front()) {
+        parts.push_back(found[std::size_t(k)].refined);
+      }
+    }
+    return normalizeTree(uniteAll(parts));
+  }
+};
+
+// Judges the regions' replacements in order, each in the tree with those
+// accepted before it, by the whole tree's fitness less the credit (a
+// distance and a normal term) of the points explained only by ghost
+// surfaces, then less that of the points the boundary it adds where the scan
+// has none would hold at the scan's density (a tree that cannot be sampled
+// supports nothing).
+struct ReplacementJudge {
+  const PointCloud& scan;
+  const SetOperations& ops;
+  const FitnessModel& model;
+  const PrimitiveLibrary& library;
+  SupportMeter& support;
+  std::optional<SurfaceSupport>& bestSupport;  // the tree's so far
+  Assembly& assemble;
+  HybridResult& out;
+  double tolerance;  // εd, scan units
+  double gain;       // the least rise of the score a replacement must bring
+  double best;       // the tree's score so far
+
+  // The verdict on region k, whose report is `h`; a replacement is accepted.
+  RegionVerdict operator()(std::size_t k, HybridRegion& h) {
+    if (!(h.localAfter > h.localBefore)) return RegionVerdict::NotImproved;
+    const CsgTree trial = assemble(std::ptrdiff_t(k));
+    const Fitness f = model.evaluate(library.adopt(trial));
+    if (!(f.total > best + gain)) return RegionVerdict::NoGain;
+    const std::size_t ghosts = ghostPoints(scan, trial, ops, tolerance);
+    const double score = f.total - 2.0 * double(ghosts);
+    if (!(score > best + gain)) return RegionVerdict::Ghost;
+    const std::optional<SurfaceSupport> s = support(trial, false);
+    if (s) h.unsupported = s->unsupported;
+    if (!bestSupport || !s) return RegionVerdict::Unsupported;
+    const double density = double(scan.size()) / bestSupport->area;
+    if (!(score - 2.0 * density * (s->unsupported - bestSupport->unsupported) > best + gain))
+      return RegionVerdict::Unsupported;
+    best = score;
+    bestSupport->unsupported = out.unsupportedAfter = s->unsupported;
+    out.ghostAfter = ghosts;
+    assemble.accepted[k] = 1;
+    ++out.replaced;
+    return RegionVerdict::Replaced;
+  }
+};
+
+// The set operations the fitness options name (`sardf` for Sardf).
+const SetOperations& setOperations(const FitnessOptions& fitness, const SardfOperations& sardf) {
+  return fitness.operations == SetOperationKind::Sardf ? static_cast<const SetOperations&>(sardf)
+         : fitness.operations == SetOperationKind::RFunction ? rFunctionOperations()
+                                                             : minMaxOperations();
 }
 
 }  // namespace
@@ -389,17 +618,12 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     throw std::invalid_argument("the hybrid method needs a scan with normals");
   if (tree.empty()) throw std::invalid_argument("the hybrid method needs a tree to refine");
   const double diagonal = scan.diagonal();
-  const double voxel = grid.voxelSize();
   HybridResult out;
   out.tree = tree;
   out.primitivesBefore = out.primitivesAfter = tree.primitiveCount();
 
   const SardfOperations sardf(options.fitness.sardfRadius * diagonal);
-  const SetOperations& ops = options.fitness.operations == SetOperationKind::Sardf
-                                 ? static_cast<const SetOperations&>(sardf)
-                             : options.fitness.operations == SetOperationKind::RFunction
-                                 ? rFunctionOperations()
-                                 : minMaxOperations();
+  const SetOperations& ops = setOperations(options.fitness, sardf);
   const std::vector<std::uint32_t> bad = badlyExplained(
       scan, tree, ops, std::max(options.fitness.distanceTolerance * diagonal, 3.0 * options.noise),
       options.badAngle * std::numbers::pi / 180.0);
@@ -407,43 +631,19 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
 
   // Regions of bad points, each with the members of the tree around it.
   const std::vector<CsgTree> members = unionMembers(tree);
-  const double margin = options.margin * voxel;
-  std::vector<Aabb> memberBounds;
-  for (const CsgTree& m : members) memberBounds.push_back(m.bounds().grown(margin));
-  const auto least = std::max<std::size_t>(
-      10, std::size_t(std::ceil(options.minRegionPoints * double(scan.size()))));
-  std::vector<Region> regions;
-  for (std::vector<std::uint32_t>& points :
-       pointRegions(scan.points, bad, options.regionCell * voxel)) {
-    if (points.size() < least) continue;
-    Region r;
-    for (const std::uint32_t i : points) r.box.extend(scan.points[i]);
-    r.box = r.box.grown(margin);
-    r.bad = std::move(points);
-    selectMembers(r, memberBounds);
-    regions.push_back(std::move(r));
-  }
+  const RegionLayout layout = regionLayout(members, scan.size(), options, grid.voxelSize());
+  std::vector<Region> regions = badPointRegions(scan, bad, layout);
 
   // The tree's boundary no scan point is near: material (or a hole) the
   // voxels kept where the part has none, which no point can call bad. Its
   // samples are grouped as the bad points are; a group is a region when the
   // area it stands for would hold as many points as the least region.
   const double tolerance = options.fitness.distanceTolerance * diagonal;
-  std::optional<NearestNeighbors> nearest;
   SupportOptions so;
   so.distance = options.supportDistance * tolerance;
   so.samples = options.supportSamples;
   so.seed = options.evolve.seed;
-  const auto support = [&](const CsgTree& t, bool keep) -> std::optional<SurfaceSupport> {
-    if (!nearest) nearest.emplace(scan.points);
-    SupportOptions o = so;
-    o.keepUnsupported = keep;
-    try {
-      return surfaceSupport(t, *nearest, o);
-    } catch (const std::invalid_argument&) {
-      return std::nullopt;
-    }
-  };
+  SupportMeter support{scan, so};
   // The input tree's support, which also weighs every replacement below.
   std::optional<SurfaceSupport> bestSupport = support(tree, options.unsupportedRegions);
   if (bestSupport) {
@@ -451,62 +651,13 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
     out.unsupportedBefore = out.unsupportedAfter = bestSupport->unsupported;
   }
   if (bestSupport && bestSupport->area > 0.0 && options.unsupportedRegions) {
-    // On a sparse scan, random gaps between points are wider than εd: only
-    // samples farther than a few mean spacings from every point form regions.
-    const double density = double(scan.size()) / bestSupport->area;
-    const double far = std::max(so.distance, options.supportSpacing / std::sqrt(density));
-    std::vector<Vec3> samples;
-    for (std::size_t i = 0; i < bestSupport->unsupportedSamples.size(); ++i)
-      if (bestSupport->unsupportedDistances[i] > far)
-        samples.push_back(bestSupport->unsupportedSamples[i]);
-    for (Region& r : boundaryRegions(samples, bestSupport->sampleArea, density, double(least),
-                                     options.regionCell * voxel, margin, memberBounds))
+    for (Region& r : unsupportedRegions(*bestSupport, support, options, layout))
       regions.push_back(std::move(r));
   }
-  regions = joinMeetingRegions(std::move(regions), memberBounds);
+  regions = joinMeetingRegions(std::move(regions), layout.memberBounds);
 
-  // The regions' searches, `searches` of each with seeds of their own, all in
-  // parallel; each is deterministic for its seed. A region keeps the search
-  // with the best fitness on its points (the first of equals).
-  const std::size_t searches = std::max<std::size_t>(options.searches, 1);
-  std::vector<RegionSearch> runs(regions.size() * searches);
-  tbb::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t j) {
-    const std::size_t k = j / searches, s = j % searches;
-    const std::uint64_t seed = mixSeed(options.evolve.seed, k);
-    runs[j] = searchRegion(scan, regions[k], members, candidates, grid, inside, options,
-                           s == 0 ? seed : mixSeed(seed, s), control);
-  });
-  std::vector<RegionSearch> found(regions.size());
-  for (std::size_t k = 0; k < regions.size(); ++k) {
-    HybridRegion all;  // every search's fitness, and their time
-    for (std::size_t j = k * searches; j < (k + 1) * searches; ++j) {
-      all.searchFitness.push_back(runs[j].report.localAfter);
-      all.seconds += runs[j].report.seconds;
-    }
-    found[k] = std::move(runs[k * searches + all.search()]);
-    found[k].report.searchFitness = std::move(all.searchFitness);
-    found[k].report.seconds = all.seconds;
-  }
-
-  // The tree with the refined subtrees of the accepted regions and of
-  // region `trial` in place of their members (regions are disjoint in
-  // members; a region's refined subtree takes its first member's place).
-  std::vector<std::ptrdiff_t> regionOf(members.size(), -1);
-  for (std::size_t k = 0; k < regions.size(); ++k)
-    for (const std::size_t m : regions[k].members) regionOf[m] = std::ptrdiff_t(k);
-  std::vector<char> accepted(found.size(), 0);
-  const auto assemble = [&](std::ptrdiff_t trial) {
-    std::vector<CsgTree> parts;
-    for (std::size_t m = 0; m < members.size(); ++m) {
-      const std::ptrdiff_t k = regionOf[m];
-      if (k < 0 || (!accepted[std::size_t(k)] && k != trial)) {
-        parts.push_back(members[m]);
-      } else if (m == regions[std::size_t(k)].members.front()) {
-        parts.push_back(found[std::size_t(k)].refined);
-      }
-    }
-    return normalizeTree(uniteAll(parts));
-  };
+  const SearchInputs in{scan, members, candidates, grid, inside, options};
+  std::vector<RegionSearch> found = searchRegions(in, regions, control);
 
   // One model of the whole tree on all points, over its primitives and those
   // of every subtree its region's search improved, judges each replacement.
@@ -518,38 +669,22 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   const FitnessModel model(scan.points, scan.normals, diagonal, library, options.fitness,
                            options.fitness.voxelWeight > 0.0 ? &target : nullptr);
   out.before = model.evaluate(library.adopt(tree));
-  // A replacement is judged by the fitness less the credit (a distance and a
-  // normal term) of the points explained only by ghost surfaces, then less
-  // that of the points the boundary it adds where the scan has none would
-  // hold at the scan's density (a tree that cannot be sampled supports
-  // nothing).
-  const double gain = options.minGain * double(scan.size());
   out.ghostBefore = out.ghostAfter = ghostPoints(scan, tree, ops, tolerance);
-  double best = out.before.total - 2.0 * double(out.ghostBefore);  // less its ghosts' credit
-  const auto judge = [&](std::size_t k) {
-    HybridRegion& h = found[k].report;
-    if (!(h.localAfter > h.localBefore)) return RegionVerdict::NotImproved;
-    const CsgTree trial = assemble(std::ptrdiff_t(k));
-    const Fitness f = model.evaluate(library.adopt(trial));
-    if (!(f.total > best + gain)) return RegionVerdict::NoGain;
-    const std::size_t ghosts = ghostPoints(scan, trial, ops, tolerance);
-    const double score = f.total - 2.0 * double(ghosts);
-    if (!(score > best + gain)) return RegionVerdict::Ghost;
-    const std::optional<SurfaceSupport> s = support(trial, false);
-    if (s) h.unsupported = s->unsupported;
-    if (!bestSupport || !s) return RegionVerdict::Unsupported;
-    const double density = double(scan.size()) / bestSupport->area;
-    if (!(score - 2.0 * density * (s->unsupported - bestSupport->unsupported) > best + gain))
-      return RegionVerdict::Unsupported;
-    best = score;
-    bestSupport->unsupported = out.unsupportedAfter = s->unsupported;
-    out.ghostAfter = ghosts;
-    accepted[k] = 1;
-    ++out.replaced;
-    return RegionVerdict::Replaced;
-  };
+  Assembly assemble{members, regions, found};
+  ReplacementJudge judge{.scan = scan,
+                         .ops = ops,
+                         .model = model,
+                         .library = library,
+                         .support = support,
+                         .bestSupport = bestSupport,
+                         .assemble = assemble,
+                         .out = out,
+                         .tolerance = tolerance,
+                         .gain = options.minGain * double(scan.size()),
+                         // less its ghosts' credit
+                         .best = out.before.total - 2.0 * double(out.ghostBefore)};
   for (std::size_t k = 0; k < found.size(); ++k) {
-    found[k].report.verdict = judge(k);
+    found[k].report.verdict = judge(k, found[k].report);
     out.regions.push_back(found[k].report);
   }
   if (out.replaced == 0) {

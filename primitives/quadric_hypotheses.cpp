@@ -461,13 +461,11 @@ Candidate makeCandidate(CsgTree tree, CandidateOrigin origin, std::vector<int> s
   return c;
 }
 
-}  // namespace
-
-std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& stats) {
-  std::vector<Candidate> out;
-  const std::vector<PlaneInfo> planes = planeInfos(ctx), noPlanes;
-  // The planes that ends and quarter boxes snap onto (none without snapping).
-  const std::vector<PlaneInfo>& snapPlanes = ctx.options.snapToPlanes ? planes : noPlanes;
+// Each surface's bounded quadric (none for planes and for surfaces that
+// give none), its ends snapped onto `planes` when the options ask.
+std::vector<std::optional<Quadric>> boundedQuadrics(const Context& ctx,
+                                                    const std::vector<PlaneInfo>& planes,
+                                                    HypothesisStats& stats) {
   std::vector<std::optional<Quadric>> quadrics(ctx.surfaces.size());
   for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
     const Surface& surface = ctx.surfaces[s];
@@ -479,15 +477,114 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
     if (!quadrics[s]) ++stats.skippedSurfaces;
     if (quadrics[s] && ctx.options.snapToPlanes) snapEndsToPlanes(ctx, *quadrics[s], planes);
   }
-  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
-    if (!quadrics[s]) continue;
-    const Surface& surface = ctx.surfaces[s];
-    const Quadric& q = *quadrics[s];
-    const double support = static_cast<double>(surface.inliers.size());
+  return quadrics;
+}
+
+// The candidates made from each bounded quadric: what they are made from
+// (the fitted planes, those ends and quarter boxes snap onto, every
+// surface's bounded quadric) and where they go.
+struct QuadricCandidates {
+  const Context& ctx;
+  HypothesisStats& stats;
+  const std::vector<PlaneInfo>& planes;
+  const std::vector<PlaneInfo>& snapPlanes;
+  const std::vector<std::optional<Quadric>>& quadrics;
+  std::vector<Candidate>& out;
+
+  // The cylinder of the given radius on q's axis, over [lo, hi] along it.
+  CsgTree cylinderOver(const Quadric& q, double radius, double lo, double hi) const {
+    return CsgTree::leaf(Cylinder{q.axisPoint + 0.5 * (lo + hi) * q.axis, q.axis, radius, hi - lo});
+  }
+
+  // A cylinder extended to the cap plane beyond a chamfer.
+  void addCappedCylinder(const Quadric& q, const Cylinder& cyl, int index, double support) {
+    const auto lower = capPlane(ctx, q, cyl.radius, false, planes, quadrics);
+    const auto upper = capPlane(ctx, q, cyl.radius, true, planes, quadrics);
+    if (!lower && !upper) return;
+    const double lo = lower ? lower->first : q.extent.lo;
+    const double hi = upper ? upper->first : q.extent.hi;
+    std::vector<int> used{index};
+    if (lower) used.push_back(static_cast<int>(lower->second));
+    if (upper) used.push_back(static_cast<int>(upper->second));
+    out.push_back(makeCandidate(cylinderOver(q, cyl.radius, lo, hi), CandidateOrigin::Quadric,
+                                std::move(used), support));
+    ++stats.extendedCylinders;
+  }
+
+  // A cylinder whose end meets no fitted plane may go on, unseen, inside
+  // another solid that bounds it (a knob's body under its dome, a pin in
+  // a ball): the same cylinder run out to the scan's extent along its
+  // axis at each such end, for an intersection to cut.
+  void addOpenEndCylinder(const Quadric& q, const Cylinder& cyl, int index, double support) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3& p : ctx.scan.points) {
+      const double t = (p - q.axisPoint).dot(q.axis);
+      lo = std::min(lo, t), hi = std::max(hi, t);
+    }
+    if (q.capped[0]) lo = q.extent.lo;
+    if (q.capped[1]) hi = q.extent.hi;
+    if (hi - lo > q.extent.size() + ctx.voxel) {
+      out.push_back(makeCandidate(cylinderOver(q, cyl.radius, lo, hi), CandidateOrigin::Quadric,
+                                  {index}, support));
+      ++stats.extendedCylinders;
+    }
+  }
+
+  // The additional box: the maximal box of a quarter cylinder, else the
+  // minimal oriented bounding box of the patch. For a patch of a surface of
+  // revolution that is the minimal box with one axis on the surface's axis
+  // (exact, by rotating calipers; CGAL's search on such patches finds boxes
+  // up to 3 % larger, and only on a wide full cone a tilted box 9 % smaller,
+  // which would hide that the box is the cone's own); for a sphere patch,
+  // CGAL's optimal oriented bounding box.
+  Box additionalBox(const Quadric& q) {
+    if (const auto* cyl = q.primitive.as<Cylinder>()) {
+      double start = 0.0, coverage = 0.0;
+      angularSpan(q, start, coverage);
+      if (std::abs(coverage - 0.5 * kPi) <= ctx.options.quarterTolerance * kPi / 180.0) {
+        ++stats.quarterCylinders;
+        return quarterBox(ctx, q, cyl->radius, start, coverage, snapPlanes);
+      }
+    }
+    return q.axial ? axialMinimalBox(q)
+                   : boxAround(searchedBoxFrame(q.points, ctx.options.seed), q.points, q.sigma);
+  }
+
+  // The additional box of q, it less and intersected with q, and Fayolle's
+  // separating planes: the faces of the box, bounding it, unless the plane
+  // was fitted already. None for a flat box or one that is q's own bounds.
+  void addBoxCandidates(const Quadric& q, int index, double support) {
+    const Box box = additionalBox(q);
+    if (!(box.halfSize.minCoeff() > 1e-6 * ctx.diagonal)) return;
+    // Both boxes are estimated from the noisy patch: compare within its noise too.
+    if (isOwnBoundingBox(box, q.primitive, ctx.lengthTol + 2.0 * q.sigma, ctx.cosParallel)) {
+      ++stats.ownBoundsDropped;
+      return;
+    }
+    const CsgTree additional = CsgTree::leaf(box);
+    const CsgTree quadric = CsgTree::leaf(q.primitive);
+    out.push_back(makeCandidate(additional, CandidateOrigin::Additional, {index}, support));
+    out.push_back(makeCandidate(CsgTree::subtract({additional, quadric}), CandidateOrigin::Indirect,
+                                {index}, support));
+    out.push_back(makeCandidate(CsgTree::intersect({additional, quadric}),
+                                CandidateOrigin::Indirect, {index}, support));
+    for (int k = 0; k < 3; ++k) {
+      for (double side : {1.0, -1.0}) {
+        const Vec3 n = side * box.axes.col(k);
+        const Vec3 face = box.center + box.halfSize[k] * n;
+        if (isFittedPlane(ctx, n, face, planes)) continue;
+        out.push_back(makeCandidate(CsgTree::leaf(HalfSpace{n, n.dot(face)}),
+                                    CandidateOrigin::Separator, {index}, support));
+      }
+    }
+  }
+
+  // Every candidate of surface s's bounded quadric q.
+  void addAll(const Quadric& q, std::size_t s) {
+    const double support = static_cast<double>(ctx.surfaces[s].inliers.size());
     const int index = static_cast<int>(s);
     out.push_back(
         makeCandidate(CsgTree::leaf(q.primitive), CandidateOrigin::Quadric, {index}, support));
-
     if (ctx.options.axialBands) {
       for (const Band& band : axialBands(ctx, q, snapPlanes)) {
         out.push_back(makeCandidate(CsgTree::leaf(band.primitive), CandidateOrigin::Quadric,
@@ -495,45 +592,11 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
         ++stats.axialBands;
       }
     }
-
-    // A cylinder extended to the cap plane beyond a chamfer.
-    if (const auto* cyl = q.primitive.as<Cylinder>(); cyl != nullptr && ctx.options.extendToCaps) {
-      const auto lower = capPlane(ctx, q, cyl->radius, false, planes, quadrics);
-      const auto upper = capPlane(ctx, q, cyl->radius, true, planes, quadrics);
-      if (lower || upper) {
-        const double lo = lower ? lower->first : q.extent.lo;
-        const double hi = upper ? upper->first : q.extent.hi;
-        std::vector<int> used{index};
-        if (lower) used.push_back(static_cast<int>(lower->second));
-        if (upper) used.push_back(static_cast<int>(upper->second));
-        out.push_back(makeCandidate(CsgTree::leaf(Cylinder{q.axisPoint + 0.5 * (lo + hi) * q.axis,
-                                                           q.axis, cyl->radius, hi - lo}),
-                                    CandidateOrigin::Quadric, std::move(used), support));
-        ++stats.extendedCylinders;
-      }
+    if (const auto* cyl = q.primitive.as<Cylinder>()) {
+      if (ctx.options.extendToCaps) addCappedCylinder(q, *cyl, index, support);
+      if (ctx.options.extendOpenEnds && !(q.capped[0] && q.capped[1]))
+        addOpenEndCylinder(q, *cyl, index, support);
     }
-
-    // A cylinder whose end meets no fitted plane may go on, unseen, inside
-    // another solid that bounds it (a knob's body under its dome, a pin in
-    // a ball): the same cylinder run out to the scan's extent along its
-    // axis at each such end, for an intersection to cut.
-    if (const auto* cyl = q.primitive.as<Cylinder>();
-        cyl != nullptr && ctx.options.extendOpenEnds && !(q.capped[0] && q.capped[1])) {
-      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-      for (const Vec3& p : ctx.scan.points) {
-        const double t = (p - q.axisPoint).dot(q.axis);
-        lo = std::min(lo, t), hi = std::max(hi, t);
-      }
-      if (q.capped[0]) lo = q.extent.lo;
-      if (q.capped[1]) hi = q.extent.hi;
-      if (hi - lo > q.extent.size() + ctx.voxel) {
-        out.push_back(makeCandidate(CsgTree::leaf(Cylinder{q.axisPoint + 0.5 * (lo + hi) * q.axis,
-                                                           q.axis, cyl->radius, hi - lo}),
-                                    CandidateOrigin::Quadric, {index}, support));
-        ++stats.extendedCylinders;
-      }
-    }
-
     // Fayolle: a cylinder with the torus' major radius over the patch's extent.
     if (const auto* torus = q.primitive.as<Torus>()) {
       const double height =
@@ -544,51 +607,21 @@ std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& st
           CsgTree::leaf(Cylinder{q.axisPoint + mid * q.axis, q.axis, torus->majorRadius, height}),
           CandidateOrigin::Separator, {index}, support));
     }
+    addBoxCandidates(q, index, support);
+  }
+};
 
-    // The additional box: the maximal box of a quarter cylinder, else the
-    // minimal oriented bounding box of the patch. For a patch of a surface of
-    // revolution that is the minimal box with one axis on the surface's axis
-    // (exact, by rotating calipers; CGAL's search on such patches finds boxes
-    // up to 3 % larger, and only on a wide full cone a tilted box 9 % smaller,
-    // which would hide that the box is the cone's own); for a sphere patch,
-    // CGAL's optimal oriented bounding box.
-    std::optional<Box> box;
-    if (const auto* cyl = q.primitive.as<Cylinder>()) {
-      double start = 0.0, coverage = 0.0;
-      angularSpan(q, start, coverage);
-      if (std::abs(coverage - 0.5 * kPi) <= ctx.options.quarterTolerance * kPi / 180.0) {
-        box = quarterBox(ctx, q, cyl->radius, start, coverage, snapPlanes);
-        ++stats.quarterCylinders;
-      }
-    }
-    if (!box) {
-      box = q.axial ? axialMinimalBox(q)
-                    : boxAround(searchedBoxFrame(q.points, ctx.options.seed), q.points, q.sigma);
-    }
-    if (!(box->halfSize.minCoeff() > 1e-6 * ctx.diagonal)) continue;
-    // Both boxes are estimated from the noisy patch: compare within its noise too.
-    if (isOwnBoundingBox(*box, q.primitive, ctx.lengthTol + 2.0 * q.sigma, ctx.cosParallel)) {
-      ++stats.ownBoundsDropped;
-      continue;
-    }
-    const CsgTree additional = CsgTree::leaf(*box);
-    const CsgTree quadric = CsgTree::leaf(q.primitive);
-    out.push_back(makeCandidate(additional, CandidateOrigin::Additional, {index}, support));
-    out.push_back(makeCandidate(CsgTree::subtract({additional, quadric}), CandidateOrigin::Indirect,
-                                {index}, support));
-    out.push_back(makeCandidate(CsgTree::intersect({additional, quadric}),
-                                CandidateOrigin::Indirect, {index}, support));
-    // Fayolle's separating planes: the faces of the box, bounding it, unless
-    // the plane was fitted already.
-    for (int k = 0; k < 3; ++k) {
-      for (double side : {1.0, -1.0}) {
-        const Vec3 n = side * box->axes.col(k);
-        const Vec3 face = box->center + box->halfSize[k] * n;
-        if (isFittedPlane(ctx, n, face, planes)) continue;
-        out.push_back(makeCandidate(CsgTree::leaf(HalfSpace{n, n.dot(face)}),
-                                    CandidateOrigin::Separator, {index}, support));
-      }
-    }
+}  // namespace
+
+std::vector<Candidate> quadricCandidates(const Context& ctx, HypothesisStats& stats) {
+  std::vector<Candidate> out;
+  const std::vector<PlaneInfo> planes = planeInfos(ctx), noPlanes;
+  // The planes that ends and quarter boxes snap onto (none without snapping).
+  const std::vector<PlaneInfo>& snapPlanes = ctx.options.snapToPlanes ? planes : noPlanes;
+  const std::vector<std::optional<Quadric>> quadrics = boundedQuadrics(ctx, planes, stats);
+  QuadricCandidates candidates{ctx, stats, planes, snapPlanes, quadrics, out};
+  for (std::size_t s = 0; s < ctx.surfaces.size(); ++s) {
+    if (quadrics[s]) candidates.addAll(*quadrics[s], s);
   }
   return out;
 }

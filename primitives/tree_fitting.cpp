@@ -433,6 +433,193 @@ double rmsField(const FitContext& c, std::span<const Vec3> points,
   return points.empty() ? 0.0 : std::sqrt(sum / double(points.size()));
 }
 
+// What the fit reads besides the problem: its context, the scan, the
+// options, the leaves' primitives before the fit, and lengths in scan units.
+struct FitInputs {
+  const FitContext& c;
+  const PointCloud& scan;
+  const TreeFitOptions& options;
+  std::span<const Primitive> input;
+  double diagonal;
+  double tolerance;                                            // εd
+  std::span<const int> polarity = c.parameters->polarities();  // -1: a leaf enters complemented
+  double exposed = 0.05 * tolerance;  // a face's foot this near the surface is on it
+  double nearBand = options.nearDistance * tolerance;
+  double cosLimit = std::cos(options.nearAngle * std::numbers::pi / 180.0);
+};
+
+// Where each point meets the tree: the leaves its residual depends on and
+// the face each is read on (none: the point does not drive the fit), and
+// side ≠ 0 where the residual is its first active leaf's face value times it.
+struct PointLeaves {
+  std::vector<std::vector<int>> active, faces;
+  std::vector<double> side;
+};
+
+// The exposed face point i was scanned on: within the band, its normal (as
+// the solid sees it) closest to the point's, and the tree's surface at the
+// point's foot on it; none when no face is.
+void chooseExposedFace(const FitInputs& in, std::size_t i, Scratch& s, PointLeaves& leaves) {
+  const Vec3& p = in.scan.points[i];
+  const Vec3& n = in.scan.normals[i];
+  leaves.active[i].clear();
+  leaves.faces[i].clear();
+  double best = in.cosLimit;
+  for (std::size_t l = 0; l < in.input.size(); ++l) {
+    for (int k = 0; k < faceCount(in.input[l]); ++k) {
+      const double v = faceValue(in.input[l], k, p);
+      if (std::abs(v) > in.nearBand) continue;
+      const Vec3 out = faceNormal(in.input[l], k, p, in.c.lengthStep);
+      const double agree = in.polarity[l] * out.dot(n);
+      if (agree <= best) continue;
+      const Vec3 foot = p + v * out;
+      for (std::size_t m = 0; m < in.input.size(); ++m) s.leafValue[m] = in.input[m].value(foot);
+      if (std::abs(in.c.flat->forward(in.c.ops, s)) > in.exposed) continue;
+      best = agree;
+      leaves.active[i] = {int(l)};
+      leaves.faces[i] = {k};
+      leaves.side[i] = in.polarity[l];
+    }
+  }
+}
+
+// Point i must lie on its main leaf's face, its normal within nearAngle
+// of the face's (a point just inside an edge, which the field reads on
+// the other face, still counts on its own); else it has no leaves.
+void keepOnMainFace(const FitInputs& in, std::size_t i, const Scratch& s, PointLeaves& leaves) {
+  std::vector<int>& active = leaves.active[i];
+  std::size_t main = 0;
+  for (std::size_t a = 1; a < active.size(); ++a)
+    if (std::abs(s.leafAdjoint[std::size_t(active[a])]) >
+        std::abs(s.leafAdjoint[std::size_t(active[main])]))
+      main = a;
+  const std::size_t l = std::size_t(active[main]);
+  const double side = s.leafAdjoint[l] < 0.0 ? -1.0 : 1.0;
+  const Vec3& p = in.scan.points[i];
+  if (side * faceNormal(in.input[l], leaves.faces[i][main], p, in.c.lengthStep)
+                 .dot(in.scan.normals[i]) <
+      in.cosLimit) {
+    active.clear();
+    leaves.faces[i].clear();
+  }
+}
+
+// The points near the surface and the leaves the field depends on there.
+PointLeaves pointLeaves(const FitInputs& in) {
+  const std::span<const Vec3> points = in.scan.points;
+  PointLeaves leaves{std::vector<std::vector<int>>(points.size()),
+                     std::vector<std::vector<int>>(points.size()),
+                     std::vector<double>(points.size(), 0.0)};
+  const FlatTree& flat = *in.c.flat;
+  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
+    Scratch& s = scratch(in.c);
+    for (std::size_t l = 0; l < in.input.size(); ++l) s.leafValue[l] = in.input[l].value(points[i]);
+    if (std::abs(flat.forward(in.c.ops, s)) > in.options.nearDistance * in.tolerance) return;
+    flat.backward(s);
+    const Vec3 n = in.scan.hasNormals() ? in.scan.normals[i] : Vec3::Zero();
+    for (std::size_t l = 0; l < in.input.size(); ++l) {
+      if (std::abs(s.leafAdjoint[l]) <= 1e-9) continue;
+      leaves.active[i].push_back(int(l));
+      // The leaf's value is read on its face from here on.
+      leaves.faces[i].push_back(faceOf(in.input[l], points[i],
+                                       s.leafAdjoint[l] < 0.0 ? Vec3(-n) : n, in.nearBand,
+                                       in.c.lengthStep));
+    }
+    if (leaves.active[i].empty() || !in.scan.hasNormals()) return;
+    if (!in.options.throughField) {
+      chooseExposedFace(in, i, s, leaves);
+    } else {
+      keepOnMainFace(in, i, s, leaves);
+    }
+  });
+  return leaves;
+}
+
+// The points with leaves, thinned to an even subset of `maxPoints` at most.
+std::vector<std::size_t> nearPoints(const PointLeaves& leaves, std::size_t maxPoints) {
+  std::vector<std::size_t> near;
+  for (std::size_t i = 0; i < leaves.active.size(); ++i)
+    if (!leaves.active[i].empty()) near.push_back(i);
+  if (near.size() > maxPoints) {
+    std::vector<std::size_t> thinned(maxPoints);
+    for (std::size_t k = 0; k < thinned.size(); ++k) thinned[k] = near[k * near.size() / maxPoints];
+    near = std::move(thinned);
+  }
+  return near;
+}
+
+// The least-squares problem over the tree's parameter values.
+struct FitProblem {
+  std::vector<double> values;  // the blocks' values, moved by the solver
+  ceres::HuberLoss loss;       // of the point residuals
+  ceres::Problem problem;
+};
+
+// One residual per point of `near` over its active leaves' blocks.
+void addPointResiduals(const FitInputs& in, const PointLeaves& leaves,
+                       std::span<const std::size_t> near, FitProblem& fit) {
+  const TreeParameters& parameters = *in.c.parameters;
+  const std::vector<ParameterBlock>& blocks = parameters.blocks();
+  for (const std::size_t i : near) {
+    std::vector<std::size_t> pointBlocks;
+    for (const int l : leaves.active[i])
+      for (const std::size_t b : parameters.leafBlocks(std::size_t(l)))
+        if (std::find(pointBlocks.begin(), pointBlocks.end(), b) == pointBlocks.end())
+          pointBlocks.push_back(b);
+    std::vector<double*> data;
+    for (const std::size_t b : pointBlocks) data.push_back(fit.values.data() + blocks[b].offset);
+    fit.problem.AddResidualBlock(
+        new PointResidual(in.c, in.scan.points[i], leaves.active[i], leaves.faces[i],
+                          std::move(pointBlocks), leaves.side[i]),
+        &fit.loss, data);
+  }
+}
+
+// The blocks the residuals use: constant ones held, radii kept above the
+// length tolerance and, with a prior weight, each free block held to its
+// start; the free values are counted in `out`.
+void constrainBlocks(const FitInputs& in, FitProblem& fit, TreeFitResult& out) {
+  const TreeParameters& parameters = *in.c.parameters;
+  const TreeFitOptions& options = in.options;
+  for (const ParameterBlock& b : parameters.blocks()) {
+    double* data = fit.values.data() + b.offset;
+    if (!fit.problem.HasParameterBlock(data)) continue;
+    if (b.constant) {
+      fit.problem.SetParameterBlockConstant(data);
+    } else {
+      out.parameters += std::size_t(b.size);
+      if (b.kind == ParameterBlock::Kind::Radius)
+        fit.problem.SetParameterLowerBound(data, 0,
+                                           options.parameters.lengthTolerance * in.diagonal);
+      if (options.priorWeight > 0.0) {
+        // A turn moving the far end of the part by εd weighs as a shift by εd.
+        const double sigma = b.kind == ParameterBlock::Kind::Rotation
+                                 ? 2.0 * options.distanceTolerance
+                                 : in.tolerance;
+        fit.problem.AddResidualBlock(
+            new PriorResidual(parameters.values().data() + b.offset, b.size, sigma,
+                              std::sqrt(options.priorWeight)),
+            nullptr, data);
+      }
+    }
+  }
+}
+
+// The solver's settings: sparse, single-threaded, silent, the state
+// refreshed every iteration.
+ceres::Solver::Options solverOptions(const TreeFitOptions& options) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  so.max_num_iterations = options.maxIterations;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  so.function_tolerance = 1e-8;
+  so.parameter_tolerance = 1e-10;
+  so.update_state_every_iteration = true;
+  return so;
+}
+
 }  // namespace
 
 TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
@@ -461,80 +648,15 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
   for (const Node* leaf : parameters.leaves()) c.current.push_back(leaf->primitive);
   const std::vector<Primitive> input = c.current;
   out.sharedBlocks = parameters.sharedBlocks();
+  const FitInputs in{.c = c,
+                     .scan = scan,
+                     .options = options,
+                     .input = input,
+                     .diagonal = diagonal,
+                     .tolerance = tolerance};
 
-  // The points near the surface and the leaves the field depends on there.
-  std::vector<double> field(points.size());
-  std::vector<std::vector<int>> active(points.size()), faces(points.size());
-  std::vector<double> side(points.size(), 0.0);
-  // Each leaf's polarity: -1 when it enters the solid complemented.
-  const std::span<const int> polarity = parameters.polarities();
-  const double exposed = 0.05 * tolerance;  // a face's foot this near the surface is on it
-  const double nearBand = options.nearDistance * tolerance;
-  const double cosLimit = std::cos(options.nearAngle * std::numbers::pi / 180.0);
-  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
-    Scratch& s = scratch(c);
-    for (std::size_t l = 0; l < input.size(); ++l) s.leafValue[l] = input[l].value(points[i]);
-    field[i] = flat.forward(c.ops, s);
-    if (std::abs(field[i]) > options.nearDistance * tolerance) return;
-    flat.backward(s);
-    const Vec3 n = scan.hasNormals() ? scan.normals[i] : Vec3::Zero();
-    for (std::size_t l = 0; l < input.size(); ++l) {
-      if (std::abs(s.leafAdjoint[l]) <= 1e-9) continue;
-      active[i].push_back(int(l));
-      // The leaf's value is read on its face from here on.
-      faces[i].push_back(faceOf(input[l], points[i], s.leafAdjoint[l] < 0.0 ? Vec3(-n) : n,
-                                nearBand, c.lengthStep));
-    }
-    if (active[i].empty() || !scan.hasNormals()) return;
-    if (!options.throughField) {
-      // The exposed face the point was scanned on: within the band, its
-      // normal (as the solid sees it) closest to the point's, and the tree's
-      // surface at the point's foot on it.
-      active[i].clear();
-      faces[i].clear();
-      double best = cosLimit;
-      for (std::size_t l = 0; l < input.size(); ++l) {
-        for (int k = 0; k < faceCount(input[l]); ++k) {
-          const double v = faceValue(input[l], k, points[i]);
-          if (std::abs(v) > nearBand) continue;
-          const Vec3 out = faceNormal(input[l], k, points[i], c.lengthStep);
-          const double agree = polarity[l] * out.dot(n);
-          if (agree <= best) continue;
-          const Vec3 foot = points[i] + v * out;
-          for (std::size_t m = 0; m < input.size(); ++m) s.leafValue[m] = input[m].value(foot);
-          if (std::abs(flat.forward(c.ops, s)) > exposed) continue;
-          best = agree;
-          active[i] = {int(l)};
-          faces[i] = {k};
-          side[i] = polarity[l];
-        }
-      }
-      return;
-    }
-    // The point must lie on its main leaf's face, its normal within nearAngle
-    // of the face's (a point just inside an edge, which the field reads on
-    // the other face, still counts on its own).
-    std::size_t main = 0;
-    for (std::size_t a = 1; a < active[i].size(); ++a)
-      if (std::abs(s.leafAdjoint[std::size_t(active[i][a])]) >
-          std::abs(s.leafAdjoint[std::size_t(active[i][main])]))
-        main = a;
-    const std::size_t l = std::size_t(active[i][main]);
-    const double side = s.leafAdjoint[l] < 0.0 ? -1.0 : 1.0;
-    if (side * faceNormal(input[l], faces[i][main], points[i], c.lengthStep).dot(n) < cosLimit) {
-      active[i].clear();
-      faces[i].clear();
-    }
-  });
-  std::vector<std::size_t> near;
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!active[i].empty()) near.push_back(i);
-  if (near.size() > options.maxPoints) {
-    std::vector<std::size_t> thinned(options.maxPoints);
-    for (std::size_t k = 0; k < thinned.size(); ++k)
-      thinned[k] = near[k * near.size() / options.maxPoints];
-    near = std::move(thinned);
-  }
+  const PointLeaves leaves = pointLeaves(in);
+  const std::vector<std::size_t> near = nearPoints(leaves, options.maxPoints);
   out.points = near.size();
   std::vector<Vec3> used;
   for (const std::size_t i : near) used.push_back(points[i]);
@@ -542,62 +664,22 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
   if (near.size() < 10) return out;
 
   // The problem: one residual per point over its active leaves' blocks.
-  std::vector<double> values = parameters.values();
-  const std::vector<ParameterBlock>& blocks = parameters.blocks();
   ceres::Problem::Options po;
   po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  ceres::HuberLoss loss(options.lossScale);
-  for (const std::size_t i : near) {
-    std::vector<std::size_t> pointBlocks;
-    for (const int l : active[i])
-      for (const std::size_t b : parameters.leafBlocks(std::size_t(l)))
-        if (std::find(pointBlocks.begin(), pointBlocks.end(), b) == pointBlocks.end())
-          pointBlocks.push_back(b);
-    std::vector<double*> data;
-    for (const std::size_t b : pointBlocks) data.push_back(values.data() + blocks[b].offset);
-    problem.AddResidualBlock(
-        new PointResidual(c, points[i], active[i], faces[i], std::move(pointBlocks), side[i]),
-        &loss, data);
-  }
-  for (const ParameterBlock& b : blocks) {
-    double* data = values.data() + b.offset;
-    if (!problem.HasParameterBlock(data)) continue;
-    if (b.constant) {
-      problem.SetParameterBlockConstant(data);
-    } else {
-      out.parameters += std::size_t(b.size);
-      if (b.kind == ParameterBlock::Kind::Radius)
-        problem.SetParameterLowerBound(data, 0, options.parameters.lengthTolerance * diagonal);
-      if (options.priorWeight > 0.0) {
-        // A turn moving the far end of the part by εd weighs as a shift by εd.
-        const double sigma =
-            b.kind == ParameterBlock::Kind::Rotation ? 2.0 * options.distanceTolerance : tolerance;
-        problem.AddResidualBlock(new PriorResidual(parameters.values().data() + b.offset, b.size,
-                                                   sigma, std::sqrt(options.priorWeight)),
-                                 nullptr, data);
-      }
-    }
-  }
+  FitProblem fit{parameters.values(), ceres::HuberLoss(options.lossScale), ceres::Problem(po)};
+  addPointResiduals(in, leaves, near, fit);
+  constrainBlocks(in, fit, out);
 
-  RefreshState refresh(c, values);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  so.max_num_iterations = options.maxIterations;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
-  so.function_tolerance = 1e-8;
-  so.parameter_tolerance = 1e-10;
-  so.update_state_every_iteration = true;
+  RefreshState refresh(c, fit.values);
+  ceres::Solver::Options so = solverOptions(options);
   so.callbacks.push_back(&refresh);
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  ceres::Solve(so, &fit.problem, &summary);
   out.iterations = int(summary.iterations.size()) - 1;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
 
   std::vector<Primitive> fitted;
-  if (!summary.IsSolutionUsable() || !parameters.primitives(values, fitted)) return out;
+  if (!summary.IsSolutionUsable() || !parameters.primitives(fit.values, fitted)) return out;
   for (const Primitive& p : fitted) {
     try {
       p.validate();
