@@ -212,14 +212,16 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
       stall = 0;
     }
   }
-  if (roughPhase) {
+  // A cancelled search's tree is not used: no more work on all points.
+  const bool cancelled = result.stop == EvolveStop::Cancelled;
+  if (roughPhase && !cancelled) {
     evaluator.setModel(&model);
     evaluator.evaluate(population, result.evaluations);
     order = ranking(population);
   }
   const Creature& winner = population[order.front()];
-  result.best = removeRedundancy(winner.tree, model);
-  result.fitness = model.evaluate(result.best);
+  result.best = cancelled ? winner.tree : removeRedundancy(winner.tree, model);
+  if (!cancelled) result.fitness = model.evaluate(result.best);
   result.seconds = elapsed();
   return result;
 }

@@ -658,6 +658,7 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
 
   const SearchInputs in{scan, members, candidates, grid, inside, options};
   std::vector<RegionSearch> found = searchRegions(in, regions, control);
+  if (control.cancelled()) return out;  // the input tree, unjudged: the caller drops it
 
   // One model of the whole tree on all points, over its primitives and those
   // of every subtree its region's search improved, judges each replacement.

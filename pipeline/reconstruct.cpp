@@ -146,6 +146,10 @@ void gpMethod(Reconstruction& out, const PointCloud& scan, const ReconstructOpti
       },
       go.fitness.voxelWeight > 0.0 ? &target : nullptr);
   out.timeLimitHit = out.timeLimitHit || gp.search.stop == EvolveStop::TimeLimit;
+  if (control.cancelled()) {
+    clock.finish("cancelled");
+    return;
+  }
   const EvolveResult& s = gp.search;
   char summary[200];
   std::snprintf(summary, sizeof(summary),
