@@ -128,7 +128,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     fo.resolution = base.resolution;
     fo.seed = base.seed;
     fo.detect = base.detect;
-    fo.refineThin = base.refineThin;
+    fo.finerGrid = base.finerGrid;
     fo.memoryLimit = base.memoryLimit;
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, fo, {}, console.progress());
     if (!found.ok()) throw ParseError(scanPath.string() + ": " + found.detection.message);

@@ -126,7 +126,7 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
     std::snprintf(buf, sizeof(buf),
                   "read %.2f s, detection %.2f s, surface fit %.2f s, regularisation %.3f s, "
                   "hypotheses %.2f s, total %.2f s",
-                  readSeconds, found.detectSeconds, found.refineSeconds, found.regularizeSeconds,
+                  readSeconds, found.detectSeconds, found.fitSeconds, found.regularizeSeconds,
                   found.hypothesisSeconds, total.seconds());
     console.info(buf);
     console.info("wrote surfaces.json, candidates.json, segments.ply in " +

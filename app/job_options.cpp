@@ -16,7 +16,7 @@ void addJobOptions(CLI::App& app, JobOptions& job) {
       "and separators combined by a genetic search on the points)");
   app.add_option("--res", o.resolution, "Voxels along the longest side of the part")
       ->check(inRange(range::resolution));
-  app.add_flag("!--no-finer-grid,!--no-refine-thin", o.refineThin,
+  app.add_flag("!--no-finer-grid,!--no-refine-thin", o.finerGrid,
                "Keep the resolution as given even when the surfaces show a wall, slot, rod or "
                "hole thinner than two voxels (by default the grid is then laid finer, up to "
                "twice the resolution). --no-refine-thin: old name, kept for one release");

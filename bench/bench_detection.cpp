@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   const CsgTree tree = readTreeJson(std::filesystem::path(treePath));
   std::printf("part %s, noise %.4f D, %zu primitives\n", treePath.c_str(), noise,
               tree.primitiveCount());
-  std::printf("%8s %9s %9s %9s %9s %9s %9s %8s %10s %9s\n", "points", "detect_s", "refine_s",
+  std::printf("%8s %9s %9s %9s %9s %9s %9s %8s %10s %9s\n", "points", "detect_s", "fit_s",
               "regul_s", "hypoth_s", "total_s", "surfaces", "cands", "eq3", "peak_MiB");
   for (std::size_t n : {50000u, 100000u, 500000u}) {
     SampleOptions so;
@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
     const SurfacesAndCandidates found = detectAndFit(scan);
     const HypothesisSet& hyp = found.hypotheses;
     std::printf("%8zu %9.3f %9.3f %9.4f %9.3f %9.3f %9zu %8zu %10zu %9.0f\n", n,
-                found.detectSeconds, found.refineSeconds, found.regularizeSeconds,
+                found.detectSeconds, found.fitSeconds, found.regularizeSeconds,
                 found.hypothesisSeconds, seconds(t0), found.detection.surfaces.size(),
                 hyp.candidates.size(), hyp.stats.cuboids.eq3Count, peakMiB());
     std::fflush(stdout);

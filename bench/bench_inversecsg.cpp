@@ -6,9 +6,9 @@
 // volumetric IoU between the tree and the mesh's solid.
 //
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
-//        [--models 011,039,...] [--samples S] [--time-limit T] [--no-refine-thin]
-//        [--no-unsupported-regions] [--finish] [--refine-searches K]
-//        [--refine-stall S] [--seed S] [--keep OUTDIR]
+//        [--models 011,039,...] [--samples S] [--time-limit T] [--no-finer-grid]
+//        [--no-unsupported-regions] [--finish] [--repair-searches K]
+//        [--repair-stall S] [--seed S] [--keep OUTDIR]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -20,9 +20,9 @@
 //                 a model whose process runs past 3 T + 60 s is killed
 //   --no-unsupported-regions  the hybrid searches only where points are
 //                 badly explained (HybridOptions::unsupportedRegions off)
-//   --refine-searches K, --refine-stall S  the hybrid's searches of each
-//                 region and their stall rule (as `csgvox --refine-searches`,
-//                 `--refine-stall`)
+//   --repair-searches K, --repair-stall S  the hybrid's repair searches of
+//                 each region and their stall rule (as `csgvox --repair-searches`,
+//                 `--repair-stall`; the old --refine-* names are accepted too)
 //   --seed        ReconstructOptions::seed (default 1; as `csgvox --seed`): the
 //                 scans stay the same, only the reconstruction's random
 //                 choices change, to tell a change's effect from luck
@@ -83,10 +83,10 @@ struct Options {
   std::size_t points = 50000;
   double noise = 0.0;
   int resolution = 64;
-  bool refineThin = true;
+  bool finerGrid = true;
   bool unsupportedRegions = true;
-  std::size_t refineSearches = 0;  // 0: the default
-  std::size_t refineStall = 0;     // 0: the default
+  std::size_t repairSearches = 0;  // 0: the default
+  std::size_t repairStall = 0;     // 0: the default
   bool finish = false;
   std::uint64_t seed = 1;
   int iouSamples = 200000;
@@ -212,10 +212,10 @@ Result runModel(const Options& opt, const std::string& model) {
 
     ReconstructOptions ro;
     ro.resolution = opt.resolution;
-    ro.refineThin = opt.refineThin;
+    ro.finerGrid = opt.finerGrid;
     ro.hybrid.unsupportedRegions = opt.unsupportedRegions;
-    if (opt.refineSearches > 0) ro.hybrid.searches = opt.refineSearches;
-    if (opt.refineStall > 0) ro.hybrid.evolve.stallGenerations = opt.refineStall;
+    if (opt.repairSearches > 0) ro.hybrid.searches = opt.repairSearches;
+    if (opt.repairStall > 0) ro.hybrid.evolve.stallGenerations = opt.repairStall;
     ro.finish.enabled = opt.finish;
     ro.seed = opt.seed;
     ro.method = opt.method;
@@ -318,7 +318,7 @@ Result runIsolated(const Options& opt, const std::string& model) {
   if (child == 0) {
     close(fds[0]);
     // The solver's own warnings (e.g. a failed Cholesky step during
-    // refinement) would bury the table; the row carries what matters.
+    // repair search) would bury the table; the row carries what matters.
     const int devNull = open("/dev/null", O_WRONLY);
     if (devNull >= 0) {
       dup2(devNull, STDERR_FILENO);
@@ -391,9 +391,9 @@ std::vector<std::string> splitList(const std::string& s) {
 int usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
-               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-refine-thin] "
-               "[--no-unsupported-regions] [--finish] [--refine-searches K] "
-               "[--refine-stall S] [--seed S] [--keep OUTDIR]\n",
+               "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-finer-grid] "
+               "[--no-unsupported-regions] [--finish] [--repair-searches K] "
+               "[--repair-stall S] [--seed S] [--keep OUTDIR]\n",
                argv0);
   return 2;
 }
@@ -409,16 +409,16 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       opt.noise = std::atof(argv[++i]);
     } else if (arg == "--res" && hasValue) {
       opt.resolution = std::atoi(argv[++i]);
-    } else if (arg == "--no-refine-thin") {
-      opt.refineThin = false;
+    } else if (arg == "--no-finer-grid" || arg == "--no-refine-thin") {
+      opt.finerGrid = false;
     } else if (arg == "--no-unsupported-regions") {
       opt.unsupportedRegions = false;
     } else if (arg == "--finish") {
       opt.finish = true;
-    } else if (arg == "--refine-searches" && hasValue) {
-      opt.refineSearches = std::size_t(std::max(1, std::atoi(argv[++i])));
-    } else if (arg == "--refine-stall" && hasValue) {
-      opt.refineStall = std::size_t(std::max(1, std::atoi(argv[++i])));
+    } else if ((arg == "--repair-searches" || arg == "--refine-searches") && hasValue) {
+      opt.repairSearches = std::size_t(std::max(1, std::atoi(argv[++i])));
+    } else if ((arg == "--repair-stall" || arg == "--refine-stall") && hasValue) {
+      opt.repairStall = std::size_t(std::max(1, std::atoi(argv[++i])));
     } else if (arg == "--seed" && hasValue) {
       opt.seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--models" && hasValue) {
@@ -454,11 +454,11 @@ void printHeading(const Options& opt) {
       "method %s, time limit %s%s%s\n",
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
       std::string(methodName(opt.method)).c_str(), limitText,
-      opt.refineThin ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
+      opt.finerGrid ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
   if (opt.seed != 1) std::printf("reconstruction seed: %llu\n", (unsigned long long)opt.seed);
-  if (opt.refineSearches > 0 || opt.refineStall > 0)
+  if (opt.repairSearches > 0 || opt.repairStall > 0)
     std::printf("hybrid searches per region: %zu, stall: %zu generations (0: the default)\n",
-                opt.refineSearches, opt.refineStall);
+                opt.repairSearches, opt.repairStall);
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <atomic>
 
-#include "optimize/union_refinement.h"
+#include "optimize/union_search.h"
 #include "optimize/union_simplification.h"
 
 namespace csgvox {
@@ -105,7 +105,7 @@ Construction constructCsg(std::span<const CsgTree> candidates, std::span<const D
   out.stats.selected = members.size();
   if (progress) progress(0.95, "union");
 
-  if (options.refine) {
+  if (options.unionSearch) {
     std::vector<UnionMember> extra;
     for (std::uint32_t i = 0; i < n; ++i) {
       if (d[i].plus > 0 && !d[i].exceedsGrid) extra.push_back(UnionMember{i, {}, d[i].voxels});
@@ -115,7 +115,7 @@ Construction constructCsg(std::span<const CsgTree> candidates, std::span<const D
         extra.push_back(UnionMember{truncate[r], subtrees[r].actions, subtrees[r].voxels});
       }
     }
-    refineUnion(members, extra, d, inside, std::max(options.unionChoice.minFeatureVoxels, 1.0));
+    searchUnion(members, extra, d, inside, std::max(options.unionChoice.minFeatureVoxels, 1.0));
   }
   if (options.simplify) dropNoOps(members, d, size);
   out.stats.chosen = members.size();

@@ -28,7 +28,7 @@ struct ConstructOptions {
   /// and members while (primitives × minFeatureVoxels + voxels disagreeing
   /// with the labels) falls; undoes a root that cut too much and the members
   /// chosen to cover its loss.
-  bool refine = true;
+  bool unionSearch = true;
   /// A candidate counts as free of outside voxels (Wu: |V−| = 0) when at most
   /// this fraction of its voxels are labelled outside; absorbs labelling noise.
   double outsideTolerance = 0.02;
@@ -52,7 +52,7 @@ struct ConstructStats {
   std::size_t unionCandidates = 0;  ///< M: candidates of phase 2
   std::size_t selected = 0;         ///< candidates phase 2's selection put in the union
   std::size_t chosen = 0;           ///< members of the final union: the selected ones after the
-                                    ///< union's refinement (which adds primitives and subtrees
+                                    ///< union search (which adds primitives and subtrees
                                     ///< outside phase 2's candidates) and the no-op removal
   bool provedOptimal = true;        ///< every solve finished its branch and bound
 };

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "primitives/bounding_box.h"
-#include "primitives/surface_refinement.h"
+#include "primitives/surface_fit.h"
 
 namespace csgvox {
 namespace {
@@ -140,8 +140,8 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     return out;
   }
   start = Clock::now();
-  refineSurfaces(scan, out.detection);
-  out.refineSeconds = secondsSince(start);
+  fitSurfaces(scan, out.detection);
+  out.fitSeconds = secondsSince(start);
   start = Clock::now();
   out.regularization = regularizeSurfaces(out.detection);
   out.regularizeSeconds = secondsSince(start);
@@ -167,8 +167,8 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   // on the asked grid's voxel size; hypotheses are built once, on the grid
   // chosen).
   int resolution = options.resolution;
-  std::string refined;
-  if (options.refineThin && options.maxRefinement > 1.0) {
+  std::string finer;
+  if (options.finerGrid && options.maxFinerGrid > 1.0) {
     const double h = gridAt(options.resolution).voxelSize();
     ThinFeatureOptions to;
     to.maxThickness = options.thinVoxels * h;
@@ -176,7 +176,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     out.thin = findThinFeatures(scan, out.detection.surfaces, to);
     if (!out.thin.empty()) {
       // Voxels scale as 1 / resolution: the resolution that gives the
-      // thinnest feature thinVoxels voxels, at most maxRefinement times the
+      // thinnest feature thinVoxels voxels, at most maxFinerGrid times the
       // asked one. Not laid when its voxels would be under noiseVoxels times
       // the residual of the feature's own surfaces: a part of two voxels
       // there is noise, not a wall. (The scan-wide noise estimate is no
@@ -188,14 +188,14 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
         residual = std::max(residual, out.detection.surfaces[std::size_t(t.second)].rms);
       }
       const int finer = int(std::min(std::ceil(options.resolution * to.maxThickness / thinnest),
-                                     std::floor(options.resolution * options.maxRefinement)));
+                                     std::floor(options.resolution * options.maxFinerGrid)));
       const double finerVoxel = h * double(options.resolution) / double(finer);
       if (finer > options.resolution && finerVoxel >= options.noiseVoxels * residual) {
         resolution = finer;
         char buf[128];
         std::snprintf(buf, sizeof(buf), ", resolution %d (a %s %.2g voxels thin)", finer,
                       std::string(thinKindName(t.kind)).c_str(), thinnest / h);
-        refined = buf;
+        finer = buf;
       }
     }
   }
@@ -204,12 +204,12 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
       voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount()) >
           double(options.memoryLimit)) {
     layGrid(options.resolution);  // the finer grid does not fit: the asked one
-    refined.clear();
+    finer.clear();
   }
   out.hypothesisSeconds = secondsSince(start);
   if (onStage) {
     onStage("hypotheses", true,
-            std::to_string(out.hypotheses.candidates.size()) + " candidates" + refined);
+            std::to_string(out.hypotheses.candidates.size()) + " candidates" + finer);
   }
   return out;
 }

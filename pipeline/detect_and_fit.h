@@ -42,13 +42,13 @@ struct DetectAndFitOptions {
   /// than `thinVoxels` voxels at `resolution` (a wall or a slot between
   /// opposite planes that face each other, a rod or a hole), the grid is laid
   /// at the resolution that gives the thinnest one `thinVoxels` voxels, at
-  /// most `maxRefinement` × `resolution`.
+  /// most `maxFinerGrid` × `resolution`.
   /// No finer grid is laid when its voxels would be smaller than
   /// `noiseVoxels` × the RMS residual of the thin feature's own surfaces:
   /// the labels would follow the noise, not the walls.
-  bool refineThin = true;
+  bool finerGrid = true;
   double thinVoxels = 2.0;
-  double maxRefinement = 2.0;
+  double maxFinerGrid = 2.0;
   double noiseVoxels = 2.0;
   /// Bytes the voxel stage may use (0: no limit): a finer grid that would
   /// need more (voxelStageBytes) falls back to `resolution`.
@@ -61,14 +61,14 @@ double voxelStageBytes(std::size_t candidates, std::size_t voxels);
 
 /// Surfaces and candidates of a scan, as the main job computes them.
 struct SurfacesAndCandidates {
-  DetectionResult detection;            ///< refined and regularised surfaces (or why none)
+  DetectionResult detection;            ///< fitted and regularised surfaces (or why none)
   RegularizationReport regularization;  ///< what the regularisation changed
   VoxelGrid grid;                       ///< the main job's voxel grid (its size: the fit tolerance)
   HypothesisSet hypotheses;             ///< bounded candidates (empty unless detection.ok())
   int resolution = 0;                   ///< the grid's resolution (finer than asked when thin)
   std::vector<ThinFeature> thin;        ///< features thinner than thinVoxels at the asked one
   double detectSeconds = 0.0;           ///< RANSAC
-  double refineSeconds = 0.0;           ///< Ceres refinement
+  double fitSeconds = 0.0;              ///< the surface fit (Ceres)
   double regularizeSeconds = 0.0;       ///< regularisation
   double hypothesisSeconds = 0.0;       ///< grid frame and hypotheses
 
@@ -84,14 +84,12 @@ OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces,
                     std::uint64_t seed = 1);
 
 /// Detects, refines and regularises the scan's surfaces, lays the voxel
-/// grid over gridBox() (finer where the part is thin: refineThin) and builds the bounded hypotheses with the grid's
-/// voxel size as their fit tolerance. Stages "detect" and "hypotheses" are
-/// reported to `onStage`. `progress` is passed to detection: returning
-/// false cancels it (detection.status is then Cancelled and nothing after
-/// detection runs). When detection finds nothing usable, or the points are
-/// too scattered for surfaces to explain them (estimated noise above
-/// maxNoise), the result carries status NoSurfaces and a one-line message,
-/// and no grid or hypotheses.
+/// grid over gridBox() (finer where the part is thin: finerGrid) and builds the bounded hypotheses
+/// with the grid's voxel size as their fit tolerance. Stages "detect" and "hypotheses" are reported
+/// to `onStage`. `progress` is passed to detection: returning false cancels it (detection.status is
+/// then Cancelled and nothing after detection runs). When detection finds nothing usable, or the
+/// points are too scattered for surfaces to explain them (estimated noise above maxNoise), the
+/// result carries status NoSurfaces and a one-line message, and no grid or hypotheses.
 /// @throw std::invalid_argument when the scan is empty or has no normals.
 SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOptions& options = {},
                                    const StageCallback& onStage = {},

@@ -2,7 +2,7 @@
 /// The hybrid method's last step: every primitive parameter of the final
 /// tree is refined on the scan points through the tree's field
 /// (primitives/tree_fitting.h), with the regularised relations kept exact,
-/// and the refined tree is kept only when the whole tree's fitness does not
+/// and the fitted tree is kept only when the whole tree's fitness does not
 /// get worse and its voxels agree with the labels at least as well.
 
 #include <cstddef>
@@ -31,14 +31,14 @@ struct FinishOptions {
 
 /// What finishTree() did.
 struct FinishResult {
-  CsgTree tree;                       ///< the refined tree if accepted, else the input
+  CsgTree tree;                       ///< the fitted tree if accepted, else the input
   bool ran = false;                   ///< the fit ran (enough points near the surface)
-  bool accepted = false;              ///< the refined parameters were kept
+  bool accepted = false;              ///< the fitted parameters were kept
   TreeFitResult fit;                  ///< the fit's own figures (residual RMS, points, ...)
   Fitness before;                     ///< the input tree's fitness on all points
-  Fitness after;                      ///< the refined tree's (accepted or not)
+  Fitness after;                      ///< the fitted tree's (accepted or not)
   double voxelIouBefore = 0.0;        ///< the input tree's voxels against the inside labels
-  double voxelIouAfter = 0.0;         ///< the refined tree's
+  double voxelIouAfter = 0.0;         ///< the fitted tree's
   std::size_t primitivesChanged = 0;  ///< leaves whose primitive moved (0 unless accepted)
   double seconds = 0.0;               ///< wall time
 };

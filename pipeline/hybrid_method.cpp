@@ -233,8 +233,8 @@ std::vector<Repair> voxelRepairs(const CsgTree& subtree, const Aabb& box,
 // What a region's search found.
 struct RegionSearch {
   HybridRegion report;
-  CsgTree subtree;  // the original subtree (union of its members)
-  CsgTree refined;  // the search's best tree
+  CsgTree subtree;   // the original subtree (union of its members)
+  CsgTree repaired;  // the search's best tree
 };
 
 // What every region's search reads: the scan, the tree's union members, the
@@ -395,7 +395,7 @@ RegionSearch searchRegion(const SearchInputs& in, const Region& region, std::uin
   eo.variation.maxDepth = std::max(eo.variation.maxDepth, subtree.depth() + 3);
   const EvolveResult r = evolve(model, regionSeeds(in, out.subtree, library, picks), eo, {},
                                 rough ? &*rough : nullptr);
-  out.refined = r.best;
+  out.repaired = r.best;
 
   HybridRegion& h = out.report;
   h.badPoints = region.bad.size();
@@ -517,7 +517,7 @@ std::vector<std::ptrdiff_t> memberRegions(std::size_t members, const std::vector
   return regionOf;
 }
 
-// The regions' refined subtrees and which of them the tree has taken.
+// The regions' repaired subtrees and which of them the tree has taken.
 struct Assembly {
   const std::vector<CsgTree>& members;
   const std::vector<Region>& regions;
@@ -525,9 +525,9 @@ struct Assembly {
   std::vector<std::ptrdiff_t> regionOf = memberRegions(members.size(), regions);
   std::vector<char> accepted = std::vector<char>(found.size(), 0);
 
-  // The tree with the refined subtrees of the accepted regions and of
+  // The tree with the repaired subtrees of the accepted regions and of
   // region `trial` in place of their members (regions are disjoint in
-  // members; a region's refined subtree takes its first member's place).
+  // members; a region's repaired subtree takes its first member's place).
   CsgTree operator()(std::ptrdiff_t trial) const {
     std::vector<CsgTree> parts;
     for (std::size_t m = 0; m < members.size(); ++m) {
@@ -535,7 +535,7 @@ struct Assembly {
       if (k < 0 || (!accepted[std::size_t(k)] && k != trial)) {
         parts.push_back(members[m]);
       } else if (m == regions[std::size_t(k)].members.front()) {
-        parts.push_back(found[std::size_t(k)].refined);
+        parts.push_back(found[std::size_t(k)].repaired);
       }
     }
     return normalizeTree(uniteAll(parts));
@@ -610,13 +610,13 @@ const char* regionVerdictName(RegionVerdict verdict) {
   return "?";
 }
 
-HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
+HybridResult repairTree(const PointCloud& scan, const CsgTree& tree,
                         std::span<const Candidate> candidates, const VoxelGrid& grid,
                         const VoxelSet& inside, const HybridOptions& options,
                         const RunControl& control) {
   if (!scan.hasNormals())
     throw std::invalid_argument("the hybrid method needs a scan with normals");
-  if (tree.empty()) throw std::invalid_argument("the hybrid method needs a tree to refine");
+  if (tree.empty()) throw std::invalid_argument("the hybrid method needs a tree to repair");
   const double diagonal = scan.diagonal();
   HybridResult out;
   out.tree = tree;
@@ -664,7 +664,7 @@ HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
   // of every subtree its region's search improved, judges each replacement.
   std::vector<CsgTree> all = {tree};
   for (const RegionSearch& f : found)
-    if (f.report.localAfter > f.report.localBefore) all.push_back(f.refined);
+    if (f.report.localAfter > f.report.localBefore) all.push_back(f.repaired);
   const PrimitiveLibrary library = PrimitiveLibrary::ofTree(uniteAll(all));
   const VoxelTarget target{grid, inside};
   const FitnessModel model(scan.points, scan.normals, diagonal, library, options.fitness,

@@ -43,7 +43,7 @@ namespace csgvox {
 
 /// The search of a region: population 100, at most 300 generations, 40
 /// without improvement, offspring normalised.
-inline EvolveOptions refineSearchDefaults() {
+inline EvolveOptions repairSearchDefaults() {
   EvolveOptions o;
   o.population = 100;
   o.maxGenerations = 300;
@@ -52,10 +52,10 @@ inline EvolveOptions refineSearchDefaults() {
   return o;
 }
 
-/// Options of refineTree().
+/// Options of repairTree().
 struct HybridOptions {
   FitnessOptions fitness = {.voxelWeight = 1.0};  ///< Eq. 7 (min/max field) + the voxel term
-  EvolveOptions evolve = refineSearchDefaults();  ///< each region's search
+  EvolveOptions evolve = repairSearchDefaults();  ///< each region's search
   double badAngle = 30.0;  ///< degrees: a normal further off is badly explained
   double noise = 0.0;  ///< the scan's noise sigma (scan units): a point within 3 sigma of the tree
                        ///< is not badly explained by its distance (0: εd alone decides)
@@ -90,14 +90,14 @@ enum class RegionVerdict {
           ///< (A − X) ∪ (A ∩ X)): once those points' credit is taken away, by too little
   Unsupported,  ///< it added boundary no scan point is near (a slab carved inside a plate): once
                 ///< the credit of the points that area would hold is taken away, by too little
-  Replaced,     ///< the refined subtree went into the tree
+  Replaced,     ///< the repaired subtree went into the tree
 };
 
 /// The verdict's name in reports: "not improved", "no gain", "ghost surfaces",
 /// "unsupported boundary", "replaced".
 const char* regionVerdictName(RegionVerdict verdict);
 
-/// What refineTree() did in one region.
+/// What repairTree() did in one region.
 struct HybridRegion {
   std::size_t badPoints = 0;     ///< badly explained points that formed the region
   double unsupportedArea = 0.0;  ///< the tree's boundary no point is near that formed it (units²)
@@ -118,15 +118,15 @@ struct HybridRegion {
   }
   double unsupported = -1.0;  ///< the tree with it: boundary no point is near (< 0: not weighed)
   std::size_t primitivesBefore = 0;   ///< primitives of the subtree
-  std::size_t primitivesAfter = 0;    ///< primitives of the refined subtree
+  std::size_t primitivesAfter = 0;    ///< primitives of the repaired subtree
   std::vector<double> searchFitness;  ///< each search's best fitness on the region's points, in
                                       ///< search order (localAfter is the largest)
   double seconds = 0.0;               ///< wall time of its searches, summed
 };
 
-/// Result of refineTree().
+/// Result of repairTree().
 struct HybridResult {
-  CsgTree tree;                       ///< the refined tree
+  CsgTree tree;                       ///< the repaired tree
   std::vector<HybridRegion> regions;  ///< in order of their first point
   std::size_t badPoints = 0;          ///< points the input tree explained badly
   Fitness before;                     ///< the input tree's fitness on all points
@@ -146,7 +146,7 @@ struct HybridResult {
 /// the voxel labels. `control`'s deadline bounds the searches, which then
 /// keep their best trees; a cancel request stops them too.
 /// @throw std::invalid_argument when the scan has no normals or the tree is empty.
-HybridResult refineTree(const PointCloud& scan, const CsgTree& tree,
+HybridResult repairTree(const PointCloud& scan, const CsgTree& tree,
                         std::span<const Candidate> candidates, const VoxelGrid& grid,
                         const VoxelSet& inside, const HybridOptions& options = {},
                         const RunControl& control = {});

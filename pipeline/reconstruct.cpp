@@ -179,7 +179,7 @@ void hybridMethod(Reconstruction& out, HybridMethodResult& hy, const PointCloud&
   ho.evolve.seed = options.seed;
   ho.noise = out.detection.noise;
   hy.voxelTree = out.tree;
-  hy.repair = refineTree(scan, out.tree, out.hypotheses.candidates, out.grid, out.labels.inside, ho,
+  hy.repair = repairTree(scan, out.tree, out.hypotheses.candidates, out.grid, out.labels.inside, ho,
                          control);
   const HybridResult& h = hy.repair;
   char summary[200];
@@ -299,7 +299,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   fo.resolution = options.resolution;
   fo.seed = options.seed;
   fo.detect = options.detect;
-  fo.refineThin = options.refineThin && options.method != Method::Gp;
+  fo.finerGrid = options.finerGrid && options.method != Method::Gp;
   fo.memoryLimit = options.memoryLimit;
   SurfacesAndCandidates found =
       detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
@@ -320,7 +320,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
     return out;
   }
   out.timings.push_back(
-      {"detect", found.detectSeconds + found.refineSeconds + found.regularizeSeconds});
+      {"detect", found.detectSeconds + found.fitSeconds + found.regularizeSeconds});
   out.timings.push_back({"hypotheses", found.hypothesisSeconds});
   return afterDetection(std::move(out), std::move(found), scan, options, onStage, control);
 }

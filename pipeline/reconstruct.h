@@ -58,13 +58,13 @@ struct ReconstructOptions {
   Method method = Method::Hybrid;  ///< how the tree is built
   int resolution = 64;             ///< voxels along the longest side of the part's oriented box
   /// Up to twice the resolution when the surfaces show a feature thinner
-  /// than two voxels (DetectAndFitOptions::refineThin).
-  bool refineThin = true;
+  /// than two voxels (DetectAndFitOptions::finerGrid).
+  bool finerGrid = true;
   std::uint64_t seed = 1;      ///< seeds detection and hypotheses; same seed, same tree
   DetectOptions detect;        ///< surface detection (its seed is replaced by `seed`)
   LabelOptions labels;         ///< voxel labelling
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
-  HybridOptions hybrid;        ///< hybrid method: the refinement (its seed is set from `seed`)
+  HybridOptions hybrid;        ///< hybrid method: the repair search (its seed is set from `seed`)
   FinishOptions finish;        ///< hybrid method: the parameter fit last (its fitness is set from
                                ///< hybrid.fitness)
   GpOptions gp;                ///< gp method: the search (its seed and control are set from

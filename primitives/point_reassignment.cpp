@@ -12,14 +12,14 @@
 #include <unordered_map>
 #include <vector>
 
+#include "primitives/surface_fit.h"
 #include "primitives/surface_fit_internal.h"
-#include "primitives/surface_refinement.h"
 
 namespace csgvox {
 
 namespace {
 
-using namespace refinement_detail;
+using namespace surface_fit_detail;
 
 // Points binned into cubic cells of a given side. Two cells are adjacent
 // when they touch (26-neighbourhood): the 3D analogue of the bitmap on which

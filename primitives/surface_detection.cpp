@@ -25,7 +25,7 @@
 #include "core/seed.h"
 #include "core/statistics.h"
 #include "primitives/cgal_kernel.h"
-#include "primitives/surface_refinement.h"
+#include "primitives/surface_fit.h"
 
 namespace csgvox {
 namespace {
@@ -357,7 +357,7 @@ double normalNoiseOnSurfaces(const PointCloud& cloud, const std::vector<Surface>
 // surface remains.
 bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScales& scales,
                  double eps, double diag, Surface& shape) {
-  RefineOptions fit;
+  SurfaceFitOptions fit;
   fit.maxFitPoints = 600;  // enough to tell the types apart
   fit.maxIterations = 25;
   std::vector<Surface> candidates;
@@ -566,7 +566,7 @@ void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surfac
             std::vector<std::uint32_t>& subset) {
   result.surfaces = std::move(found);
   result.status = DetectionResult::Status::Ok;
-  RefineOptions settle;
+  SurfaceFitOptions settle;
   settle.maxFitPoints = 3000;
   // Points a surface's band reaches away from its patch stay with it until
   // the final refinement: the later passes search the unassigned points
@@ -576,7 +576,7 @@ void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surfac
   // turns the flattened ones into planes and splits stepped cylinders.
   settle.flattenToPlanes = false;
   settle.splitSteps = false;
-  refineSurfaces(cloud, result, settle);
+  fitSurfaces(cloud, result, settle);
   found = std::move(result.surfaces);
   result.surfaces.clear();
   subset.clear();

@@ -111,7 +111,7 @@ double estimateSpacing(const PointCloud& cloud);
 /// 3. after each stage, replaces each shape by the best of it refined and
 ///    every enabled type fitted to its inliers (robust cost plus a BIC
 ///    penalty: a narrow plane strip is a plane, not a large cylinder), then
-///    settles all surfaces so far with refineSurfaces (redundant ones
+///    settles all surfaces so far with fitSurfaces (redundant ones
 ///    dropped, points re-assigned, surfaces re-fitted).
 /// Surfaces are sorted by inlier count (largest first); each inlier belongs
 /// to exactly one surface. Plane normals agree with the majority of their

@@ -1,14 +1,14 @@
 #pragma once
-/// Internal to surface refinement (surface_fitting.cpp, surface_starts.cpp,
-/// point_reassignment.cpp, surface_refinement.cpp): helpers they share. Not
+/// Internal to the surface fit (surface_fitting.cpp, surface_starts.cpp,
+/// point_reassignment.cpp, surface_fit.cpp): helpers they share. Not
 /// part of the public API.
 
 #include <cstdint>
 #include <span>
 
-#include "primitives/surface_refinement.h"
+#include "primitives/surface_fit.h"
 
-namespace csgvox::refinement_detail {
+namespace csgvox::surface_fit_detail {
 
 /// Orients the surface as the majority of the points' normals: plane normal
 /// flipped, or the convexity flag set.
@@ -22,4 +22,4 @@ double rmsDistance(const PointCloud& cloud, std::span<const std::uint32_t> indic
 /// True when the surface's parameters are finite and in their ranges.
 bool validSurface(const Surface& s);
 
-}  // namespace csgvox::refinement_detail
+}  // namespace csgvox::surface_fit_detail

@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "core/principal_axes.h"
+#include "primitives/surface_fit.h"
 #include "primitives/surface_fit_internal.h"
-#include "primitives/surface_refinement.h"
 
 namespace csgvox {
 
@@ -410,7 +410,7 @@ class SurfaceFit {
 
 }  // namespace
 
-namespace refinement_detail {
+namespace surface_fit_detail {
 
 void orientByNormals(const PointCloud& cloud, std::span<const std::uint32_t> indices,
                      Surface& surface) {
@@ -467,9 +467,9 @@ bool validSurface(const Surface& s) {
   return false;
 }
 
-}  // namespace refinement_detail
+}  // namespace surface_fit_detail
 
-using namespace refinement_detail;
+using namespace surface_fit_detail;
 
 int parameterCount(SurfaceType type) {
   static constexpr std::array<int, 5> kCounts{3, 5, 6, 4, 7};  // in SurfaceType's order
@@ -554,7 +554,7 @@ bool pointOnSurface(const Surface& surface, const Vec3& p, const Vec3& n, const 
   return fit.cosine >= threshold && (scales.normal <= 0.0 || fit.normal2 <= kNormalChi2);
 }
 
-FitScales fitScales(const DetectionResult& result, const RefineOptions& options) {
+FitScales fitScales(const DetectionResult& result, const SurfaceFitOptions& options) {
   FitScales scales;
   scales.position = std::max(result.noise, 0.02 * result.epsilon);
   if (!(scales.position > 0.0)) scales.position = 1e-6 * std::max(result.diagonal, 1e-300);
@@ -565,7 +565,7 @@ FitScales fitScales(const DetectionResult& result, const RefineOptions& options)
 }
 
 double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
-                  const FitScales& scales, const RefineOptions& options) {
+                  const FitScales& scales, const SurfaceFitOptions& options) {
   if (!(scales.position > 0.0) || !(scales.loss > 0.0) || !(scales.normal >= 0.0)) {
     throw std::invalid_argument("fitSurface: scales must be positive");
   }

@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "core/principal_axes.h"
+#include "primitives/surface_fit.h"
 #include "primitives/surface_fit_internal.h"
-#include "primitives/surface_refinement.h"
 
 namespace csgvox {
 namespace {
 
-using namespace refinement_detail;
+using namespace surface_fit_detail;
 
 // Kasa circle fit in the plane spanned by u, v through `origin`; false when
 // the points are collinear in that plane.

@@ -74,7 +74,7 @@ SlotCase slotCase() {
 TEST(Hybrid, CutsASlotNarrowerThanAVoxel) {
   const SlotCase c = slotCase();
   ASSERT_LT(0.5, c.grid.voxelSize());
-  const HybridResult r = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
+  const HybridResult r = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
   EXPECT_GT(r.badPoints, 500u);
   ASSERT_EQ(r.regions.size(), 1u);
   EXPECT_TRUE(r.regions[0].replaced());
@@ -114,7 +114,7 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
   };
 
   const std::vector<Candidate> slabOnly = {candidate(plate, "plate"), candidate(slab, "slab")};
-  const HybridResult refused = refineTree(scan, voxelTree, slabOnly, grid, inside);
+  const HybridResult refused = repairTree(scan, voxelTree, slabOnly, grid, inside);
   ASSERT_EQ(refused.regions.size(), 1u);
   EXPECT_NE(refused.regions[0].verdict, RegionVerdict::Replaced);
   EXPECT_FALSE(refused.regions[0].replaced());
@@ -161,7 +161,7 @@ TEST(Hybrid, RefusesASlabWhoseFacesNoPointSupports) {
   // and put back), and never ends below the voxel tree's IoU.
   const std::vector<Candidate> both = {candidate(plate, "plate"), candidate(slab, "slab"),
                                        candidate(slot, "slot")};
-  const HybridResult cut = refineTree(scan, voxelTree, both, grid, inside);
+  const HybridResult cut = repairTree(scan, voxelTree, both, grid, inside);
   EXPECT_EQ(cut.ghostAfter, cut.ghostBefore);
   EXPECT_GE(volumetricIou(cut.tree, truth, 400), volumetricIou(voxelTree, truth, 400) - 1e-9)
       << treeNodeJson(cut.tree);
@@ -201,7 +201,7 @@ TEST(Hybrid, TakesAwayMaterialThatNoPointBoundsWithACandidateLessAPrimitive) {
   const double before = volumetricIou(voxelTree, truth, 300);
   ASSERT_LT(before, 0.99);
 
-  const HybridResult r = refineTree(scan, voxelTree, candidates, grid, inside);
+  const HybridResult r = repairTree(scan, voxelTree, candidates, grid, inside);
   ASSERT_FALSE(r.regions.empty());
   EXPECT_GT(r.regions[0].unsupportedArea, 0.0);
   EXPECT_EQ(r.replaced, 1u);
@@ -212,7 +212,7 @@ TEST(Hybrid, TakesAwayMaterialThatNoPointBoundsWithACandidateLessAPrimitive) {
   {  // the same tree with one thread
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     EXPECT_TRUE(
-        refineTree(scan, voxelTree, candidates, grid, inside).tree.structurallyEqual(r.tree));
+        repairTree(scan, voxelTree, candidates, grid, inside).tree.structurallyEqual(r.tree));
   }
 
   // Without the regions of unsupported boundary, only the points inside the
@@ -220,13 +220,13 @@ TEST(Hybrid, TakesAwayMaterialThatNoPointBoundsWithACandidateLessAPrimitive) {
   // over the same primitives does not find it.
   HybridOptions off;
   off.unsupportedRegions = false;
-  const HybridResult without = refineTree(scan, voxelTree, candidates, grid, inside, off);
+  const HybridResult without = repairTree(scan, voxelTree, candidates, grid, inside, off);
   EXPECT_LT(volumetricIou(without.tree, truth, 300), 0.999) << treeNodeJson(without.tree);
 }
 
 TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
   const SlotCase c = slotCase();
-  const HybridResult same = refineTree(c.scan, c.truth, c.candidates, c.grid, c.inside);
+  const HybridResult same = repairTree(c.scan, c.truth, c.candidates, c.grid, c.inside);
   EXPECT_TRUE(same.tree.structurallyEqual(c.truth));
   EXPECT_EQ(same.replaced, 0u);
   EXPECT_EQ(same.after.total, same.before.total);
@@ -234,11 +234,11 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
   HybridResult one, two;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    one = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
+    one = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
   }
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    two = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
+    two = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside);
   }
   EXPECT_TRUE(one.tree.structurallyEqual(two.tree));
   EXPECT_EQ(one.after.total, two.after.total);
@@ -292,8 +292,8 @@ TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
     three.evolve.seed = seed;
     HybridOptions one = three;
     one.searches = 1;
-    const HybridResult r1 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, one);
-    const HybridResult r3 = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+    const HybridResult r1 = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, one);
+    const HybridResult r3 = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
     ASSERT_EQ(r1.regions.size(), 1u);
     ASSERT_EQ(r3.regions.size(), 1u);
     const HybridRegion& h = r3.regions[0];
@@ -323,11 +323,11 @@ TEST(Hybrid, KeepsTheBestOfARegionsIndependentSearches) {
   // The same result with one thread or two, on a seed where they end apart.
   HybridOptions three = weak;
   three.evolve.seed = apartSeed;
-  const HybridResult r = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+  const HybridResult r = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
   HybridResult a;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    a = refineTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
+    a = repairTree(c.scan, c.voxelTree, c.candidates, c.grid, c.inside, three);
   }
   EXPECT_TRUE(a.tree.structurallyEqual(r.tree));
   EXPECT_EQ(a.after.total, r.after.total);
@@ -350,8 +350,8 @@ TEST(Hybrid, PointsWithinTheNoiseOfTheTreeAreNotBadlyExplained) {
   blind.evolve.maxGenerations = 0;  // only the bad points are measured here
   HybridOptions told = blind;
   told.noise = sigma;
-  const HybridResult a = refineTree(noisy, c.truth, c.candidates, c.grid, c.inside, blind);
-  const HybridResult b = refineTree(noisy, c.truth, c.candidates, c.grid, c.inside, told);
+  const HybridResult a = repairTree(noisy, c.truth, c.candidates, c.grid, c.inside, blind);
+  const HybridResult b = repairTree(noisy, c.truth, c.candidates, c.grid, c.inside, told);
   // Those between 2 and 3 sigma (4.3 % of a Gaussian) are no longer bad,
   // save those whose normal is off as well (near the slot, whose walls are
   // 2 sigma apart, and the edges): 3.0 % measured.
@@ -365,9 +365,9 @@ TEST(Hybrid, RefusesAScanWithoutNormalsOrAnEmptyTree) {
   const SlotCase c = slotCase();
   PointCloud bare;
   bare.points = c.scan.points;
-  EXPECT_THROW(refineTree(bare, c.voxelTree, c.candidates, c.grid, c.inside),
+  EXPECT_THROW(repairTree(bare, c.voxelTree, c.candidates, c.grid, c.inside),
                std::invalid_argument);
-  EXPECT_THROW(refineTree(c.scan, CsgTree{}, c.candidates, c.grid, c.inside),
+  EXPECT_THROW(repairTree(c.scan, CsgTree{}, c.candidates, c.grid, c.inside),
                std::invalid_argument);
 }
 

@@ -1,5 +1,5 @@
 // Surface detection, refinement and regularisation (primitives/surface_detection.h,
-// surface_refinement.h, regularization.h) on the bundled parts and on
+// surface_fit.h, regularization.h) on the bundled parts and on
 // synthetic and degenerate inputs.
 
 #include <gtest/gtest.h>
@@ -22,7 +22,7 @@
 #include "part_list.h"
 #include "primitives/regularization.h"
 #include "primitives/surface_detection.h"
-#include "primitives/surface_refinement.h"
+#include "primitives/surface_fit.h"
 #include "test_helpers.h"
 
 namespace csgvox::test {
@@ -315,7 +315,7 @@ TEST_P(SurfaceDetectionOnParts, FindsEveryVisibleSurfaceAndRegularisesBoxes) {
   ASSERT_EQ(result.status, DetectionResult::Status::Ok) << result.message;
   ASSERT_EQ(result.assignment.size(), scan.cloud.size());
   const DetectionResult detected = result;
-  refineSurfaces(scan.cloud, result);
+  fitSurfaces(scan.cloud, result);
   const auto t1 = std::chrono::steady_clock::now();
   const DetectionResult refined = result;
   const RegularizationReport report = regularizeSurfaces(result);
@@ -367,18 +367,18 @@ INSTANTIATE_TEST_SUITE_P(Parts, SurfaceDetectionOnParts, ::testing::ValuesIn(par
 // ---------------------------------------------------------------------------
 // Refinement.
 
-TEST(SurfaceRefinement, LowersOrKeepsTheRmsOfEverySurface) {
+TEST(SurfaceFit, LowersOrKeepsTheRmsOfEverySurface) {
   for (const char* file : {"scan.ply", "scan_noisy.ply"}) {
     const Scan scan = readScan(dataDir() / "bearing_housing" / file);
     const DetectionResult detected = detectSurfaces(scan.cloud);
     ASSERT_TRUE(detected.ok()) << detected.message;
     // Geometric least squares on the same inliers: each rms can only go down.
     DetectionResult refined = detected;
-    RefineOptions o;
+    SurfaceFitOptions o;
     o.reassign = false;
     o.removeRedundant = false;
     o.useNormals = false;
-    refineSurfaces(scan.cloud, refined, o);
+    fitSurfaces(scan.cloud, refined, o);
     ASSERT_EQ(refined.surfaces.size(), detected.surfaces.size());
     for (std::size_t s = 0; s < detected.surfaces.size(); ++s) {
       ASSERT_EQ(refined.surfaces[s].inliers, detected.surfaces[s].inliers);
@@ -387,7 +387,7 @@ TEST(SurfaceRefinement, LowersOrKeepsTheRmsOfEverySurface) {
     }
     // The default refinement (normals, re-assignment) keeps the fit as tight.
     DetectionResult full = detected;
-    refineSurfaces(scan.cloud, full);
+    fitSurfaces(scan.cloud, full);
     double before = 0.0, after = 0.0;
     std::size_t nBefore = 0, nAfter = 0;
     for (const Surface& s : detected.surfaces) {
@@ -404,7 +404,7 @@ TEST(SurfaceRefinement, LowersOrKeepsTheRmsOfEverySurface) {
   }
 }
 
-TEST(SurfaceRefinement, FitsAnExactCylinderFromARoughStart) {
+TEST(SurfaceFit, FitsAnExactCylinderFromARoughStart) {
   Rng rng(7);
   const Mat3 frame = randomRotation(rng);
   const Vec3 axis = frame.col(2), centre(3, -2, 5);
@@ -439,7 +439,7 @@ TEST(SurfaceRefinement, FitsAnExactCylinderFromARoughStart) {
 // optimum is checked here against the objective computed independently, so
 // far outliers pull the plane by little (a least-squares fit would move its
 // offset by ~0.1), and nudging the fitted plane never lowers the objective.
-TEST(SurfaceRefinement, AFitMinimisesThePointsHuberLossesAtAnyPointCount) {
+TEST(SurfaceFit, AFitMinimisesThePointsHuberLossesAtAnyPointCount) {
   FitScales scales;
   scales.position = 0.01;
   scales.normal = 0.0;  // distances only, so the objective is easy to state
@@ -505,7 +505,7 @@ DetectionResult oneSurface(const PointCloud& cloud, Surface s, double diag, doub
 // strip of the round next to it) is a plane once only its own points are
 // left: the refinement gives the plane, not a cylinder of radius far beyond
 // the part, which no bounded box could use.
-TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
+TEST(SurfaceFit, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   Rng rng(11);
   const Mat3 frame = randomRotation(rng);
   const Vec3 normal = frame.col(0), offsetPoint = Vec3(1, 2, 3) + 0.83 * normal;
@@ -521,7 +521,7 @@ TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   // Diagonal 5: the part the side belongs to.
   DetectionResult result = oneSurface(cloud, wide, 5.0, 0.025);
 
-  refineSurfaces(cloud, result);
+  fitSurfaces(cloud, result);
   ASSERT_EQ(result.surfaces.size(), 1u);
   const Surface& s = result.surfaces[0];
   ASSERT_EQ(s.type(), SurfaceType::Plane) << describe(s);
@@ -543,7 +543,7 @@ TEST(SurfaceRefinement, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   DetectionResult round = result;
   round.surfaces = {wide};
   round.assignment.assign(cloud.size(), 0);
-  refineSurfaces(cloud, round);
+  fitSurfaces(cloud, round);
   ASSERT_EQ(round.surfaces.size(), 1u);
   ASSERT_EQ(round.surfaces[0].type(), SurfaceType::Cylinder) << describe(round.surfaces[0]);
   EXPECT_NEAR(round.surfaces[0].as<CylinderSurface>()->radius, 4.0, 1e-6);
@@ -572,7 +572,7 @@ void addHole(PointCloud& cloud, Rng& rng, const Mat3& frame, const Vec3& origin,
 // epsilon, so RANSAC takes them as one surface. The refinement splits it into
 // the two cylinders; a single tessellated hole, a noisy one and a cone of 4
 // degrees (a continuous spread of distances from the axis) stay one surface.
-TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinders) {
+TEST(SurfaceFit, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinders) {
   Rng rng(5);
   const Mat3 frame = randomRotation(rng);
   const Vec3 origin(2.0, -3.4, 0.5);
@@ -583,7 +583,7 @@ TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinder
   Surface merged;
   merged.shape = CylinderSurface{origin, frame.col(2), 0.41};
   DetectionResult result = oneSurface(cloud, merged, diag, eps);
-  refineSurfaces(cloud, result);
+  fitSurfaces(cloud, result);
   ASSERT_EQ(result.surfaces.size(), 2u) << describe(result.surfaces[0]);
   std::vector<double> radii;
   for (const Surface& s : result.surfaces) {
@@ -602,7 +602,7 @@ TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinder
   Surface cone;
   cone.shape = ConeSurface{origin - 20.0 * frame.col(2), frame.col(2), 1.2 * kDeg};
   DetectionResult fromCone = oneSurface(cloud, cone, diag, eps);
-  refineSurfaces(cloud, fromCone);
+  fitSurfaces(cloud, fromCone);
   ASSERT_EQ(fromCone.surfaces.size(), 2u) << describe(fromCone.surfaces[0]);
   for (const Surface& s : fromCone.surfaces) EXPECT_EQ(s.type(), SurfaceType::Cylinder);
 
@@ -650,7 +650,7 @@ TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinder
   addHole(fine, rng, frame, origin, 0.4448, 0.95, 1.95, 1 << 30, 600);
   for (const PointCloud* c : {&single, &noisy, &conical, &rod, &hexagons, &exact, &fine}) {
     DetectionResult one = oneSurface(*c, merged, diag, eps);
-    refineSurfaces(*c, one);
+    fitSurfaces(*c, one);
     EXPECT_EQ(one.surfaces.size(), 1u) << describe(one.surfaces[0]);
   }
 }
@@ -661,14 +661,14 @@ TEST(SurfaceRefinement, AHoleAndItsCounterboreTakenAsOneSurfaceBecomeTwoCylinder
 // between, but at both distances over the same height (-1.72 to -0.91): no
 // hole and counterbore, and splitting it lowered the part's IoU. It stays
 // one surface.
-TEST(SurfaceRefinement, TwoRadiiOverTheSameHeightAreNoStep) {
+TEST(SurfaceFit, TwoRadiiOverTheSameHeightAreNoStep) {
   const Scan scan = readScan(dataDir() / "regressions" / "inversecsg-148-curved-wall.xyz");
   ASSERT_EQ(scan.cloud.size(), 219u);
   Surface wall;
   wall.shape = CylinderSurface{Vec3(-0.161, 2.687, -1.3), Vec3::UnitZ(), 1.11};
   DetectionResult result = oneSurface(scan.cloud, wall, 14.14, 0.0707);
   result.minPoints = 30;  // the scan's: 33 points lie at the larger distance
-  refineSurfaces(scan.cloud, result);
+  fitSurfaces(scan.cloud, result);
   ASSERT_EQ(result.surfaces.size(), 1u);
   EXPECT_EQ(result.surfaces[0].type(), SurfaceType::Cylinder) << describe(result.surfaces[0]);
 }
@@ -713,8 +713,8 @@ TEST(SurfaceDetection, SameSeedSameResult) {
   DetectionResult b = detectSurfaces(scan.cloud, o);
   ASSERT_TRUE(a.ok()) << a.message;
   EXPECT_TRUE(sameSurfaces(a, b));
-  refineSurfaces(scan.cloud, a);
-  refineSurfaces(scan.cloud, b);
+  fitSurfaces(scan.cloud, a);
+  fitSurfaces(scan.cloud, b);
   const RegularizationReport ra = regularizeSurfaces(a);
   const RegularizationReport rb = regularizeSurfaces(b);
   EXPECT_TRUE(sameSurfaces(a, b));
@@ -762,7 +762,7 @@ TEST(SurfaceDetection, ReportsProgressAndCanBeCancelled) {
 DetectionResult detectDegenerate(const PointCloud& cloud) {
   const auto t0 = std::chrono::steady_clock::now();
   DetectionResult r = detectSurfaces(cloud);
-  refineSurfaces(cloud, r);
+  fitSurfaces(cloud, r);
   regularizeSurfaces(r);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
   EXPECT_NE(r.status, DetectionResult::Status::Ok) << r.message;

@@ -99,9 +99,9 @@ TEST(ThinFeatures, TheThinPartsGetAFinerGridUnlessTheNoiseIsAsLarge) {
     ThinKind kind;
     double thickness;  // mm, the part's true
   };
-  for (const Case& c : {Case{"slotted_plate", ThinKind::Slot, 0.6},
-                        Case{"thin_tray", ThinKind::Wall, 1.0},
-                        Case{"sheet_bracket", ThinKind::Wall, 1.5}}) {
+  for (const Case& c :
+       {Case{"slotted_plate", ThinKind::Slot, 0.6}, Case{"thin_tray", ThinKind::Wall, 1.0},
+        Case{"sheet_bracket", ThinKind::Wall, 1.5}}) {
     for (const bool noisy : {false, true}) {
       const Scan scan = readScan(thin / c.part / (noisy ? "scan_noisy.ply" : "scan.ply"));
       const SurfacesAndCandidates found = detectAndFit(scan.cloud);
@@ -112,7 +112,7 @@ TEST(ThinFeatures, TheThinPartsGetAFinerGridUnlessTheNoiseIsAsLarge) {
       EXPECT_NEAR(found.thin.front().thickness, c.thickness, 0.1 * c.thickness) << what;
 
       DetectAndFitOptions off;
-      off.refineThin = false;
+      off.finerGrid = false;
       const SurfacesAndCandidates coarse = detectAndFit(scan.cloud, off);
       EXPECT_EQ(coarse.resolution, 64) << what;
       if (noisy) {
@@ -132,9 +132,8 @@ TEST(ThinFeatures, TheThinPartsGetAFinerGridUnlessTheNoiseIsAsLarge) {
           << what;
       // A finer grid that would not fit in memory is not laid.
       DetectAndFitOptions small;
-      small.memoryLimit =
-          std::size_t(voxelStageBytes(coarse.hypotheses.candidates.size(),
-                                      coarse.grid.voxelCount()) * 1.5);
+      small.memoryLimit = std::size_t(
+          voxelStageBytes(coarse.hypotheses.candidates.size(), coarse.grid.voxelCount()) * 1.5);
       EXPECT_EQ(detectAndFit(scan.cloud, small).resolution, 64) << what;
     }
   }
@@ -150,9 +149,8 @@ TEST(ThinFeatures, TheRegularPartsKeepTheirResolution) {
       if (!fs::exists(path)) continue;
       const SurfacesAndCandidates found = detectAndFit(readScan(path).cloud);
       ASSERT_TRUE(found.ok()) << path;
-      EXPECT_TRUE(found.thin.empty())
-          << path << ": a " << thinKindName(found.thin.front().kind) << " "
-          << found.thin.front().thickness << " thick";
+      EXPECT_TRUE(found.thin.empty()) << path << ": a " << thinKindName(found.thin.front().kind)
+                                      << " " << found.thin.front().thickness << " thick";
       EXPECT_EQ(found.resolution, 64) << path;
       ++scans;
     }

@@ -1,5 +1,5 @@
 #pragma once
-/// Surface refinement: nonlinear least squares of each detected surface on
+/// The surface fit: nonlinear least squares of each detected surface on
 /// its inliers (orthogonal distance, robust loss), re-assignment of points to
 /// the surface that explains them best, and a final re-fit, so the surface
 /// parameters are as exact as the scan allows.
@@ -14,8 +14,8 @@
 
 namespace csgvox {
 
-/// Options of refineSurfaces and fitSurface.
-struct RefineOptions {
+/// Options of fitSurfaces and fitSurface.
+struct SurfaceFitOptions {
   double lossScale = 1.0;  ///< Huber loss scale of the orthogonal distance, in units of the
                            ///< detection epsilon (ratio)
   bool useNormals = true;  ///< also fit the scan normals, weighted by their estimated noise
@@ -69,11 +69,11 @@ PointFit pointFit(const Surface& surface, const Vec3& p, const Vec3& n, const Fi
 bool pointOnSurface(const Surface& surface, const Vec3& p, const Vec3& n, const FitScales& scales,
                     double epsilon, double threshold);
 
-/// The scales refineSurfaces uses for the surfaces of a detection result:
+/// The scales fitSurfaces uses for the surfaces of a detection result:
 /// position from result.noise (at least 2 % of result.epsilon), normal from
 /// result.normalNoise (at least 0.02 rad; 0 when options.useNormals is
 /// false), loss options.lossScale x result.epsilon.
-FitScales fitScales(const DetectionResult& result, const RefineOptions& options = {});
+FitScales fitScales(const DetectionResult& result, const SurfaceFitOptions& options = {});
 
 /// Fits `surface` (type and start parameters as given) to the points
 /// `indices` of the cloud: robust (Huber) least squares of their orthogonal
@@ -86,7 +86,7 @@ FitScales fitScales(const DetectionResult& result, const RefineOptions& options 
 /// @throw std::invalid_argument when scales.position or scales.loss is not
 ///        positive or scales.normal is negative.
 double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
-                  const FitScales& scales, const RefineOptions& options = {});
+                  const FitScales& scales, const SurfaceFitOptions& options = {});
 
 /// A closed-form start for a surface of the given type on the points
 /// `indices` and their normals, to be polished with fitSurface: PCA plane;
@@ -135,7 +135,7 @@ void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_
 /// as it is.
 /// @throw std::invalid_argument when result.assignment does not match the
 ///        cloud, or the cloud has no normals.
-void refineSurfaces(const PointCloud& cloud, DetectionResult& result,
-                    const RefineOptions& options = {});
+void fitSurfaces(const PointCloud& cloud, DetectionResult& result,
+                 const SurfaceFitOptions& options = {});
 
 }  // namespace csgvox

@@ -1,7 +1,7 @@
-// refineSurfaces: fits every surface, reassigns the points, removes
+// fitSurfaces: fits every surface, reassigns the points, removes
 // redundant surfaces, re-fits and sorts.
 
-#include "primitives/surface_refinement.h"
+#include "primitives/surface_fit.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -24,7 +24,7 @@ namespace csgvox {
 
 namespace {
 
-using namespace refinement_detail;
+using namespace surface_fit_detail;
 
 // True when a curved surface has flattened into a plane on a part of
 // diagonal D: a cylinder or sphere too wide to be plausible, or a cone that
@@ -49,7 +49,7 @@ bool flattened(const Surface& s, double diag) {
 // Fits every surface on its inliers (in parallel); surfaces whose fit
 // degenerates keep their parameters, and (options.flattenToPlanes) a curved
 // surface whose fit has flattened becomes the plane of its inliers.
-void fitAll(const PointCloud& cloud, DetectionResult& result, const RefineOptions& options) {
+void fitAll(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOptions& options) {
   const FitScales scales = fitScales(result, options);
   const double diag = result.diagonal;
   // One task per surface: the fits differ widely in cost (largest surfaces first).
@@ -100,7 +100,7 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
                                                             const Surface& surf,
                                                             std::size_t minPoints, double overlap,
                                                             const FitScales& scales,
-                                                            const RefineOptions& options) {
+                                                            const SurfaceFitOptions& options) {
   const std::size_t n = surf.inliers.size();
   if (!nearCylinder(surf) || n < 2 * minPoints) return std::nullopt;
   const double rms = rmsDistance(cloud, surf.inliers, surf);
@@ -170,8 +170,9 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
 // Replaces every surface whose inliers form two stepped cylinders
 // (steppedCylinders) by the two, the inner one first; a part is split again
 // if it is itself stepped. The assignment is left to the reassignment and
-// the final bookkeeping of refineSurfaces, which rebuild it.
-void splitSteps(const PointCloud& cloud, DetectionResult& result, const RefineOptions& options) {
+// the final bookkeeping of fitSurfaces, which rebuild it.
+void splitSteps(const PointCloud& cloud, DetectionResult& result,
+                const SurfaceFitOptions& options) {
   const FitScales scales = fitScales(result, options);
   const std::size_t minPoints = std::max<std::size_t>(1, result.minPoints);
   std::vector<Surface> pending(std::make_move_iterator(result.surfaces.rbegin()),
@@ -195,7 +196,7 @@ void splitSteps(const PointCloud& cloud, DetectionResult& result, const RefineOp
 // redundant surfaces, the one the others fit best relative to itself goes
 // first (ties: the more complex type), then the test is repeated.
 void removeRedundant(const PointCloud& cloud, DetectionResult& result,
-                     const RefineOptions& options) {
+                     const SurfaceFitOptions& options) {
   std::vector<Surface>& surfaces = result.surfaces;
   const double eps = result.epsilon;
   std::vector<char> alive(surfaces.size(), 1);
@@ -308,15 +309,15 @@ void sortBySize(DetectionResult& result) {
 
 }  // namespace
 
-void refineSurfaces(const PointCloud& cloud, DetectionResult& result,
-                    const RefineOptions& options) {
+void fitSurfaces(const PointCloud& cloud, DetectionResult& result,
+                 const SurfaceFitOptions& options) {
   if (result.assignment.size() != cloud.size()) {
-    throw std::invalid_argument("refineSurfaces: the detection result belongs to another cloud");
+    throw std::invalid_argument("fitSurfaces: the detection result belongs to another cloud");
   }
   if (result.surfaces.empty()) return;
-  if (!cloud.hasNormals()) throw std::invalid_argument("refineSurfaces needs one normal per point");
+  if (!cloud.hasNormals()) throw std::invalid_argument("fitSurfaces needs one normal per point");
   if (!(result.epsilon > 0.0)) {
-    throw std::invalid_argument("refineSurfaces: the detection result has no epsilon");
+    throw std::invalid_argument("fitSurfaces: the detection result has no epsilon");
   }
   fitAll(cloud, result, options);
   if (options.removeRedundant) removeRedundant(cloud, result, options);
@@ -342,7 +343,7 @@ void refineSurfaces(const PointCloud& cloud, DetectionResult& result,
   sortBySize(result);
   if (result.surfaces.empty() && result.status == DetectionResult::Status::Ok) {
     result.status = DetectionResult::Status::NoSurfaces;
-    result.message = "no surface kept enough points after refinement";
+    result.message = "no surface kept enough points after the surface fit";
   }
 }
 

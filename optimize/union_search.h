@@ -20,9 +20,9 @@ namespace csgvox {
 /// disagree. It is Eq. 4 and Eq. 6 made global: an action or member pays for
 /// itself when it corrects about `cost` voxels, the same rule as
 /// minFeatureVoxels.
-double refinementEnergy(std::span<const UnionMember> members, const VoxelSet& inside, double cost);
+double unionSearchEnergy(std::span<const UnionMember> members, const VoxelSet& inside, double cost);
 
-/// Lowers refinementEnergy(members, inside, cost) by local search with five
+/// Lowers unionSearchEnergy(members, inside, cost) by local search with five
 /// moves, each followed by removing, one at a time, the members whose
 /// removal lowers the energy: drop one action of a member; add one of
 /// `extra` (in the construction: every subtree phase 1 built, clean or not,
@@ -31,7 +31,7 @@ double refinementEnergy(std::span<const UnionMember> members, const VoxelSet& in
 /// candidate with the same operation (the best such move of each round).
 /// `d` describes every candidate. A move is kept only when the energy falls,
 /// so the search ends; the first improving move is taken, in that order.
-void refineUnion(std::vector<UnionMember>& members, std::span<const UnionMember> extra,
+void searchUnion(std::vector<UnionMember>& members, std::span<const UnionMember> extra,
                  std::span<const DescriptionSet> d, const VoxelSet& inside, double cost);
 
 }  // namespace csgvox

@@ -1,4 +1,4 @@
-#include "optimize/union_refinement.h"
+#include "optimize/union_search.h"
 
 #include <algorithm>
 #include <bit>
@@ -39,7 +39,7 @@ std::pair<std::size_t, std::size_t> unionCounts(const VoxelSet& a, const VoxelSe
   return {all, kept};
 }
 
-// refinementEnergy from the counts: `prims` primitives, a union of `all`
+// unionSearchEnergy from the counts: `prims` primitives, a union of `all`
 // voxels of which `kept` are inside, `insideCount` inside voxels.
 double energyOf(std::size_t prims, std::size_t all, std::size_t kept, std::size_t insideCount,
                 double cost) {
@@ -163,16 +163,16 @@ struct BestAction {
   bool found = false;
 };
 
-// One refineUnion search: the union under refinement, what it may take in,
+// One searchUnion search: the union under refinement, what it may take in,
 // and its current energy.
-struct UnionRefiner {
+struct UnionSearcher {
   std::vector<UnionMember>& members;
   std::span<const UnionMember> extra;
   std::span<const DescriptionSet> d;
   const VoxelSet& inside;
   double cost;
   std::size_t insideCount = inside.count();
-  double energy = refinementEnergy(members, inside, cost);
+  double energy = unionSearchEnergy(members, inside, cost);
   // The nonzero words of each extra member's voxels.
   std::vector<std::vector<std::uint32_t>> extraWords = nonzeroWords(extra);
 
@@ -357,15 +357,16 @@ struct UnionRefiner {
 
 }  // namespace
 
-double refinementEnergy(std::span<const UnionMember> members, const VoxelSet& inside, double cost) {
+double unionSearchEnergy(std::span<const UnionMember> members, const VoxelSet& inside,
+                         double cost) {
   MemberRefs refs;
   for (const UnionMember& m : members) refs.push_back(&m);
   return energyOf(refs, inside, cost);
 }
 
-void refineUnion(std::vector<UnionMember>& members, std::span<const UnionMember> extra,
+void searchUnion(std::vector<UnionMember>& members, std::span<const UnionMember> extra,
                  std::span<const DescriptionSet> d, const VoxelSet& inside, double cost) {
-  UnionRefiner r{members, extra, d, inside, cost};
+  UnionSearcher r{members, extra, d, inside, cost};
   r.pruneCurrent();
   for (bool improved = true; improved;) {
     improved = r.dropAction() || r.tryExtras() || r.bestActionMove();
