@@ -167,7 +167,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   // on the asked grid's voxel size; hypotheses are built once, on the grid
   // chosen).
   int resolution = options.resolution;
-  std::string finer;
+  std::string finerNote;
   if (options.finerGrid && options.maxFinerGrid > 1.0) {
     const double h = gridAt(options.resolution).voxelSize();
     ThinFeatureOptions to;
@@ -195,7 +195,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
         char buf[128];
         std::snprintf(buf, sizeof(buf), ", resolution %d (a %s %.2g voxels thin)", finer,
                       std::string(thinKindName(t.kind)).c_str(), thinnest / h);
-        finer = buf;
+        finerNote = buf;
       }
     }
   }
@@ -204,12 +204,12 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
       voxelStageBytes(out.hypotheses.candidates.size(), out.grid.voxelCount()) >
           double(options.memoryLimit)) {
     layGrid(options.resolution);  // the finer grid does not fit: the asked one
-    finer.clear();
+    finerNote.clear();
   }
   out.hypothesisSeconds = secondsSince(start);
   if (onStage) {
     onStage("hypotheses", true,
-            std::to_string(out.hypotheses.candidates.size()) + " candidates" + finer);
+            std::to_string(out.hypotheses.candidates.size()) + " candidates" + finerNote);
   }
   return out;
 }
