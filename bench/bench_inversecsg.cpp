@@ -133,6 +133,8 @@ const char* statusName(Reconstruction::Status s) {
       return "TimedOut";
     case Reconstruction::Status::TooLarge:
       return "TooLarge";
+    case Reconstruction::Status::Cancelled:
+      return "Cancelled";
   }
   return "?";
 }
