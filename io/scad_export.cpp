@@ -9,6 +9,7 @@
 #include <string>
 #include <variant>
 
+#include "core/export_cutters.h"
 #include "core/export_extent.h"
 #include "io/file_util.h"
 #include "io/tree_names.h"
@@ -49,48 +50,6 @@ std::string rotateEuler(const Mat3& r) {
     a = std::atan2(-r(1, 2), r(1, 1));
   }
   return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
-}
-
-// `p` with every face moved out by `m` (a cone keeps its slope).
-Primitive grown(const Primitive& p, double m) {
-  PrimitiveShape s = p.shape();
-  if (auto* h = std::get_if<HalfSpace>(&s)) {
-    h->offset += m;
-  } else if (auto* b = std::get_if<Box>(&s)) {
-    b->halfSize.array() += m;
-  } else if (auto* c = std::get_if<Cylinder>(&s)) {
-    c->radius += m;
-    c->height += 2.0 * m;
-  } else if (auto* k = std::get_if<Cone>(&s)) {
-    const double slope = (k->radiusTop - k->radiusBottom) / k->height;
-    k->radiusBottom = std::max(0.0, k->radiusBottom - slope * m) + m;
-    k->radiusTop = std::max(0.0, k->radiusTop + slope * m) + m;
-    k->height += 2.0 * m;
-  } else if (auto* sp = std::get_if<Sphere>(&s)) {
-    sp->radius += m;
-  } else if (auto* t = std::get_if<Torus>(&s)) {
-    t->minorRadius += m;
-  }
-  return Primitive(s);
-}
-
-// Whether child i of `n` removes what it holds from the rest: a
-// difference's operands after the first, and the operand of a complement.
-bool subtracts(const Node& n, std::size_t i) {
-  return n.kind == NodeKind::Complement || (n.kind == NodeKind::Difference && i > 0);
-}
-
-// The leaves that add material (reached through an even number of
-// subtracting children) and those that remove it.
-void collectUses(const Node& n, bool removes, std::set<const Node*>& adds,
-                 std::set<const Node*>& removed) {
-  if (n.kind == NodeKind::Primitive) {
-    (removes ? removed : adds).insert(&n);
-    return;
-  }
-  for (std::size_t i = 0; i < n.children.size(); ++i) {
-    collectUses(*n.children[i], removes != subtracts(n, i), adds, removed);
-  }
 }
 
 struct Writer {
@@ -147,13 +106,13 @@ struct Writer {
         out << pad << "difference() {\n"
             << pad << "  " << cube(surroundingCube(part, bigSize))
             << "  // everything around the part\n";
-        node(*n.children.front(), indent + 1, removes != subtracts(n, 0));
+        node(*n.children.front(), indent + 1, removes != subtractsOperand(n, 0));
         out << pad << "}\n";
         return;
       default:
         out << pad << nodeKindName(n.kind) << "() {\n";
         for (std::size_t i = 0; i < n.children.size(); ++i) {
-          node(*n.children[i], indent + 1, removes != subtracts(n, i));
+          node(*n.children[i], indent + 1, removes != subtractsOperand(n, i));
         }
         out << pad << "}\n";
     }
@@ -165,8 +124,9 @@ struct Writer {
 void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options) {
   const Aabb part = exportExtent(tree);
   const auto names = leafNames(tree);
-  std::set<const Node*> adds, removes;
-  collectUses(*tree.root(), false, adds, removes);
+  const LeafRoles roles = leafRoles(tree);
+  const auto& adds = roles.adding;
+  const auto& removes = roles.removing;
   const double overcut = options.overcut * part.diagonal();
   std::unordered_map<const Node*, std::string> cutNames;
   std::set<std::string> taken;
@@ -198,7 +158,7 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
     }
     if (cuts) {
       out << "module " << (cutNames.count(leaf) ? cutNames.at(leaf) : name) << "() "
-          << w.body(grown(leaf->primitive, overcut)) << "\n";
+          << w.body(grownPrimitive(leaf->primitive, overcut)) << "\n";
     }
   }
   out << "\n";

@@ -11,6 +11,7 @@
 #include "io/csg_reader.h"
 #include "io/csg_writer.h"
 #include "io/errors.h"
+#include "io/tree_names.h"
 #include "io/tree_json.h"
 #include "part_list.h"
 #include "solid_sampling.h"
@@ -62,18 +63,32 @@ TEST(CsgFormat, WritesExactSolidsThatFreeCadTurnsIntoPartFeatures) {
       CsgTree::leaf(Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)}, "plate");
   const CsgTree hole = CsgTree::leaf(Cylinder{Vec3(30, 20, 2.5), Vec3::UnitZ(), 4, 7}, "hole");
   const CsgTree ring = CsgTree::leaf(Torus{Vec3(0, 0, 5), Vec3::UnitX(), 10, 2}, "ring");
-  const std::string text = csgText(CsgTree::subtract({CsgTree::unite({plate, ring}), hole}));
+  const CsgTree tree = CsgTree::subtract({CsgTree::unite({plate, ring}), hole});
+  const std::string text = csgText(tree);
   EXPECT_NE(text.find("difference() {\n  union() {"), std::string::npos) << text;
   EXPECT_NE(text.find("multmatrix([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2.5], [0, 0, 0, 1]]) {\n"
                       "      cube(size = [80, 60, 5], center = true);  // plate"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("cylinder($fn = 0, $fa = 12, $fs = 2, h = 7, r1 = 4, r2 = 4, center = "
-                      "true);  // hole"),
+  // The hole cuts: it is written larger by the overcut (1e-6 of the part's
+  // diagonal) on every side, as in tree.scad, so that FreeCAD cuts the faces
+  // it ends on; what adds material is written as it is.
+  const double m = 1e-6 * exportExtent(tree).diagonal();
+  EXPECT_NE(text.find("cylinder($fn = 0, $fa = 12, $fs = 2, h = " + formatNumber(7 + 2 * m) +
+                      ", r1 = " + formatNumber(4 + m) + ", r2 = " + formatNumber(4 + m) +
+                      ", center = true);  // hole"),
             std::string::npos)
       << text;
   EXPECT_NE(text.find("rotate_extrude(angle = 360, convexity = 2, $fn = 0"), std::string::npos);
   EXPECT_NE(text.find("circle($fn = 0, $fa = 12, $fs = 2, r = 2);"), std::string::npos);
+  CsgOptions exact;
+  exact.overcut = 0.0;
+  std::ostringstream out;
+  writeCsg(out, tree, exact);
+  EXPECT_NE(out.str().find("cylinder($fn = 0, $fa = 12, $fs = 2, h = 7, r1 = 4, r2 = 4, center = "
+                           "true);  // hole"),
+            std::string::npos)
+      << out.str();
 }
 
 TEST(CsgFormat, HalfSpacesBecomeCubesWhoseTopFaceIsThePlane) {
