@@ -64,11 +64,12 @@ TopoDS_Shape cube(const StandInCube& c) { return cube(c.frame, c.center, Vec3::C
 struct Builder {
   const StepOptions& options;
   const std::unordered_map<const Node*, std::string>& names;
-  Aabb extent;
+  Aabb extent;         // the part's extent (exportExtent): the scale of tolerances
+  Aabb reach;          // what the stand-ins of unbounded sets cover (standInExtent)
   double bigEdge = 0.0;
 
   TopoDS_Shape primitive(const Primitive& p) const {
-    if (const auto* h = p.as<HalfSpace>()) return cube(halfSpaceCube(*h, extent, bigEdge));
+    if (const auto* h = p.as<HalfSpace>()) return cube(halfSpaceCube(*h, reach, bigEdge));
     if (const auto* b = p.as<Box>()) return cube(b->axes, b->center, 2.0 * b->halfSize);
     if (const auto* c = p.as<Cylinder>()) {
       const gp_Ax2 ax(pnt(c->center - 0.5 * c->height * c->axis), dir(c->axis));
@@ -201,7 +202,7 @@ struct Builder {
         return boolean(op, *base, tools, n, path);
       }
       case NodeKind::Complement: {
-        const TopoDS_Shape all = cube(surroundingCube(extent, bigEdge));
+        const TopoDS_Shape all = cube(surroundingCube(reach, bigEdge));
         const auto s = child(n, 0, path);
         if (!s) return all;
         TopTools_ListOfShape tools;
@@ -337,14 +338,26 @@ Candidate unified(const Candidate& c) {
 BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   tree.validate();
   const Aabb extent = exportExtent(tree);
-  const double edge = options.halfSpaceScale * std::max(extent.diagonal(), 1e-9);
+  const Aabb reach = standInExtent(tree);
+  const double edge = options.halfSpaceScale * std::max(reach.diagonal(), 1e-9);
   const Aabb box = extent.grown(0.01 * extent.diagonal());
-  const double sampled = options.volumeTolerance > 0.0 ? sampledVolume(tree, box, 48) : 0.0;
+  double sampled = options.volumeTolerance > 0.0 ? sampledVolume(tree, box, 48) : 0.0;
   // OpenCASCADE's booleans can return a valid but wrong solid on nearly
-  // coincident or tangent faces: its volume must be the tree's.
+  // coincident or tangent faces: its volume must be the tree's. 48 cells
+  // across the box can miss that by a few per cent where a small part lies
+  // beside a large piece (a far cylinder's segment beside a block): a solid
+  // that disagrees is judged again against a finer sample, taken once.
+  bool fine = false;
   auto agrees = [&](const Candidate& c) {
-    return options.volumeTolerance <= 0.0 ||
-           volumesAgree(c.volume, sampled, box, options.volumeTolerance);
+    if (options.volumeTolerance <= 0.0 ||
+        volumesAgree(c.volume, sampled, box, options.volumeTolerance)) {
+      return true;
+    }
+    if (!fine) {
+      sampled = sampledVolume(tree, box, 160);
+      fine = true;
+    }
+    return volumesAgree(c.volume, sampled, box, options.volumeTolerance);
   };
   auto good = [&](const Candidate& c) { return c.valid && c.solids == 1 && agrees(c); };
 
@@ -358,7 +371,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
     const auto names = leafNames(t);
     StepOptions o = options;
     o.fuzzy = fuzzy;
-    const Builder b{o, names, extent, edge};
+    const Builder b{o, names, extent, reach, edge};
     try {
       NodePath path;
       const std::optional<TopoDS_Shape> shape = b.node(*t.root(), path);
@@ -408,7 +421,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   if (!chosen) {
     if (tries.empty()) throw *firstError;
     const auto names = leafNames(tree);
-    const Builder b{options, names, extent, edge};
+    const Builder b{options, names, extent, reach, edge};
     if (agrees(tries.front().solid)) {
       throw CadError("OpenCASCADE built an invalid solid for " +
                      b.nodeText(*tree.root(), NodePath{}));

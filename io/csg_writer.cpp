@@ -32,7 +32,7 @@ const char* kExact = "$fn = 0, $fa = 12, $fs = 2";
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
-  Aabb extent;
+  Aabb reach;  // what the stand-ins of unbounded sets cover (standInExtent)
   double bigEdge = 0.0;
   double overcut = 0.0;  // how much a primitive that removes material is grown
 
@@ -53,7 +53,7 @@ struct Writer {
     const std::string& name = names.at(&n);
     const Primitive p = removes && overcut > 0.0 ? grownPrimitive(n.primitive, overcut) : n.primitive;
     if (const auto* h = p.as<HalfSpace>()) {
-      cube(pad, halfSpaceCube(*h, extent, bigEdge),
+      cube(pad, halfSpaceCube(*h, reach, bigEdge),
            name + ": halfspace " + formatVector(h->normal) + ".x <= " + formatNumber(h->offset));
     } else if (const auto* b0 = p.as<Box>()) {
       const Box b = canonicalBox(*b0);
@@ -95,7 +95,7 @@ struct Writer {
         return;
       case NodeKind::Complement:
         out << pad << "difference() {\n";
-        cube(pad + "  ", surroundingCube(extent, bigEdge), "everything around the part");
+        cube(pad + "  ", surroundingCube(reach, bigEdge), "everything around the part");
         node(*n.children.front(), indent + 1, !removes);
         out << pad << "}\n";
         return;
@@ -135,7 +135,8 @@ struct Writer {
 void writeCsg(std::ostream& out, const CsgTree& tree, const CsgOptions& options) {
   const Aabb extent = exportExtent(tree);
   const auto names = leafNames(tree);
-  const Writer w{out, names, extent, options.halfSpaceScale * std::max(extent.diagonal(), 1e-9),
+  const Aabb reach = standInExtent(tree);
+  const Writer w{out, names, reach, options.halfSpaceScale * std::max(reach.diagonal(), 1e-9),
                  options.overcut * extent.diagonal()};
   out << "// CSG tree written by csgvox in OpenSCAD's CSG format; units are the scan's.\n"
       << "// FreeCAD opens it as a feature tree (File > Open, importCSG).\n";

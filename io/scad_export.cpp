@@ -57,7 +57,7 @@ struct Writer {
   const std::unordered_map<const Node*, std::string>& names;
   // The grown module of each leaf that both adds and removes material.
   const std::unordered_map<const Node*, std::string>& cutNames;
-  Aabb part;           // the part's extent (exportExtent)
+  Aabb reach;          // what the stand-ins of unbounded sets cover (standInExtent)
   double bigSize = 0;  // edge of the cubes standing in for unbounded sets
 
   std::string cube(const StandInCube& c) const {
@@ -68,7 +68,7 @@ struct Writer {
   std::string body(const Primitive& p) const {
     if (const auto* h = p.as<HalfSpace>()) {
       // A slab of the half-space covering the part: its top face is the plane.
-      return cube(halfSpaceCube(*h, part, bigSize)) + "  // halfspace " + vec(h->normal) +
+      return cube(halfSpaceCube(*h, reach, bigSize)) + "  // halfspace " + vec(h->normal) +
              ".x <= " + formatNumber(h->offset);
     }
     if (const auto* b0 = p.as<Box>()) {
@@ -104,7 +104,7 @@ struct Writer {
         return;
       case NodeKind::Complement:
         out << pad << "difference() {\n"
-            << pad << "  " << cube(surroundingCube(part, bigSize))
+            << pad << "  " << cube(surroundingCube(reach, bigSize))
             << "  // everything around the part\n";
         node(*n.children.front(), indent + 1, removes != subtractsOperand(n, 0));
         out << pad << "}\n";
@@ -139,7 +139,9 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
     taken.insert(name);
     cutNames[leaf] = name;
   }
-  Writer w{out, names, cutNames, part, options.halfSpaceScale * std::max(part.diagonal(), 1e-9)};
+  const Aabb reach = standInExtent(tree);
+  Writer w{out, names, cutNames, reach,
+           options.halfSpaceScale * std::max(reach.diagonal(), 1e-9)};
   out << "// CSG tree written by csgvox. Units are those of the scan.\n"
       << "// Each primitive is a module below; the solid is the expression at the end.\n";
   if (overcut > 0.0 && !removes.empty()) {

@@ -106,6 +106,32 @@ TEST(CsgFormat, HalfSpacesBecomeCubesWhoseTopFaceIsThePlane) {
   EXPECT_GE(test::stratifiedIou(tree, back, exportExtent(tree).grown(0.5), 40), 0.999);
 }
 
+// A half-space's cube covers everything the half-space is combined with,
+// not the part only: a cylinder of radius 10 D centred 5 D away from a block
+// of diagonal D, wholly under a plane, leaves nothing (a slab of it outside
+// the cube stayed, on a scanned plate of bosses), and one the plane crosses
+// leaves its far piece.
+TEST(CsgFormat, HalfSpaceCubesCoverPrimitivesReachingFarOutsideThePart) {
+  const CsgTree block = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(5, 4, 3)}, "block");
+  const double d = 2.0 * Vec3(5, 4, 3).norm();
+  const CsgTree cylinder =
+      CsgTree::leaf(Cylinder{Vec3(5 * d, 0, 0), Vec3::UnitZ(), 10 * d, 4}, "cylinder");
+  for (const CsgTree& cut :
+       {CsgTree::subtract({cylinder, CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 2.5})}),
+        CsgTree::subtract({cylinder, CsgTree::leaf(HalfSpace{Vec3::UnitX(), 13 * d})}),
+        CsgTree::intersect({cylinder, CsgTree::leaf(HalfSpace{-Vec3::UnitZ(), -2.5})}),
+        CsgTree::intersect({cylinder, CsgTree::leaf(HalfSpace{-Vec3::UnitX(), -13 * d})})}) {
+    const CsgTree tree = CsgTree::unite({block, cut});
+    const CsgTree back = roundTrip(tree);
+    const Aabb all = cylinder.bounds();
+    EXPECT_GE(test::stratifiedIou(tree, back, all, 60), 0.999);
+    // Written alone (when its bounds are not empty), it is cut by a cube
+    // covering the cylinder, not the part's sliver.
+    if (cut.bounds().isEmpty()) continue;
+    EXPECT_GE(test::stratifiedIou(cut, roundTrip(cut), all, 60), 0.999);
+  }
+}
+
 TEST(CsgReader, ReadsOpenScadsOwnSpellings) {
   std::istringstream in(
       "group() {\n  difference() {\n    cube(size = [2, 2, 2], center = false);\n"
