@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <ostream>
 #include <set>
@@ -52,6 +53,27 @@ std::string rotateEuler(const Mat3& r) {
   return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
 }
 
+// Sides of a polygon inscribed in a circle of radius r whose chords stay
+// within `tolerance` of the circle (sagitta r·(1 − cos(π/n))), rounded up to
+// the next of 8, 12, 16, 24, 32, 48, 64, 96, ... (multiples of four, so the
+// circle's extremes along its frame's axes are vertices; and coaxial
+// surfaces of close radii, a thin wall's two sides, get the same count, so
+// their vertices line up and the wall keeps its thickness), clamped to
+// [lo, hi].
+int segmentsFor(double r, double tolerance, int lo, int hi) {
+  double exact = double(hi);
+  if (tolerance >= r) {
+    exact = double(lo);
+  } else if (tolerance > 0.0) {
+    exact = std::numbers::pi / std::acos(1.0 - tolerance / r);
+  }
+  int n = 8;
+  for (int k = 0; n < exact && n < hi; ++k) n = (k % 2 == 0) ? n * 3 / 2 : n * 4 / 3;
+  return std::clamp(n, lo, hi);
+}
+
+std::string segmentsText(int n) { return "$fn = segments(" + std::to_string(n) + ")"; }
+
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
@@ -59,6 +81,15 @@ struct Writer {
   const std::unordered_map<const Node*, std::string>& cutNames;
   Aabb reach;          // what the stand-ins of unbounded sets cover (standInExtent)
   double bigSize = 0;  // edge of the cubes standing in for unbounded sets
+  const ScadOptions& options;
+  double tolerance = 0.0;  // chord tolerance, scan units
+
+  // $fn of a circle of radius r (`coarser`: multiple of the tolerance).
+  std::string fn(double r, double coarser = 1.0, int lo = 0) const {
+    if (options.facets > 0) return segmentsText(options.facets);
+    return segmentsText(segmentsFor(r, coarser * tolerance, std::max(lo, options.minSegments),
+                                    options.maxSegments));
+  }
 
   std::string cube(const StandInCube& c) const {
     return translate(c.center) + rotateEuler(c.frame) + "cube(" + vec(Vec3::Constant(c.edge)) +
@@ -78,20 +109,23 @@ struct Writer {
     }
     if (const auto* c = p.as<Cylinder>()) {
       return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " + formatNumber(c->height) +
-             ", r = " + formatNumber(c->radius) + ", center = true);";
+             ", r = " + formatNumber(c->radius) + ", center = true, " + fn(c->radius) + ");";
     }
     if (const auto* c = p.as<Cone>()) {
       return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " + formatNumber(c->height) +
              ", r1 = " + formatNumber(c->radiusBottom) + ", r2 = " + formatNumber(c->radiusTop) +
-             ", center = true);";
+             ", center = true, " + fn(std::max(c->radiusBottom, c->radiusTop)) + ");";
     }
     if (const auto* s = p.as<Sphere>()) {
-      return translate(s->center) + "sphere(r = " + formatNumber(s->radius) + ");";
+      return translate(s->center) + "sphere(r = " + formatNumber(s->radius) + ", " +
+             fn(s->radius, options.surfaceCoarsening) + ");";
     }
     if (const auto* t = p.as<Torus>()) {
-      return translate(t->center) + rotateZTo(t->axis) + "rotate_extrude() translate([" +
+      // Its tube swept round the axis: both circles' segments multiply.
+      return translate(t->center) + rotateZTo(t->axis) + "rotate_extrude(" +
+             fn(t->majorRadius + t->minorRadius, options.surfaceCoarsening) + ") translate([" +
              formatNumber(t->majorRadius) + ", 0]) circle(r = " + formatNumber(t->minorRadius) +
-             ");";
+             ", " + fn(t->minorRadius, options.surfaceCoarsening, options.minTubeSegments) + ");";
     }
     return "";
   }
@@ -140,8 +174,9 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
     cutNames[leaf] = name;
   }
   const Aabb reach = standInExtent(tree);
-  Writer w{out, names, cutNames, reach,
-           options.halfSpaceScale * std::max(reach.diagonal(), 1e-9)};
+  const double tolerance = options.chordTolerance * part.diagonal();
+  const double edge = options.halfSpaceScale * std::max(reach.diagonal(), 1e-9);
+  Writer w{out, names, cutNames, reach, edge, options, tolerance};
   out << "// CSG tree written by csgvox. Units are those of the scan.\n"
       << "// Each primitive is a module below; the solid is the expression at the end.\n";
   if (overcut > 0.0 && !removes.empty()) {
@@ -149,7 +184,17 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
         << " larger on every side, so that a hole\n"
            "// ending on the face it goes through leaves no film of that face.\n";
   }
-  out << "$fn = " << options.facets << ";\n\n";
+  char within[96];
+  std::snprintf(within, sizeof within, "%.3g of the true surface (%.3g on spheres and tori)",
+                tolerance, options.surfaceCoarsening * tolerance);
+  out << "// Curved primitives are polygons of segments(n) sides, n chosen from their size so\n"
+         "// that facets lie within "
+      << within
+      << ".\n"
+         "// For a finer render raise detail: 2 doubles every count (facets 4x closer),\n"
+         "// and makes rendering (F6) several times slower.\n"
+      << "detail = 1;\n"
+      << "function segments(n) = max(3, round(n * detail));\n\n";
   std::set<const Node*> seen;
   for (const Node* leaf : tree.leaves()) {
     if (!seen.insert(leaf).second) continue;
