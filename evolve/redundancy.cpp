@@ -84,7 +84,8 @@ double support(const Primitive& p, const Vec3& u) {
     return b->center.dot(u) + (b->axes.transpose() * u).cwiseAbs().dot(b->halfSize);
   }
   if (const auto* c = p.as<Cylinder>()) {
-    return c->center.dot(u) + 0.5 * c->height * std::abs(c->axis.dot(u)) + c->radius * across(c->axis);
+    return c->center.dot(u) + 0.5 * c->height * std::abs(c->axis.dot(u)) +
+           c->radius * across(c->axis);
   }
   if (const auto* k = p.as<Cone>()) {
     const double along = 0.5 * k->height * k->axis.dot(u);
@@ -138,7 +139,8 @@ std::optional<HalfSpace> asHalfSpace(const Node& operand) {
 // its plane (up to a relative rounding slack).
 bool beyond(const Node& x, const HalfSpace& h) {
   const double lowest = -support(x, -h.normal);
-  return std::isfinite(lowest) && lowest >= h.offset - 1e-9 * (std::abs(h.offset) + std::abs(lowest));
+  return std::isfinite(lowest) &&
+         lowest >= h.offset - 1e-9 * (std::abs(h.offset) + std::abs(lowest));
 }
 
 // Whether the operation's solid provably has no volume, its operands being

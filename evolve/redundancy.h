@@ -32,10 +32,10 @@ CsgTree normalizeTree(const CsgTree& tree);
 /// write half-spaces as finite solids must otherwise cut it exactly.
 CsgTree withoutEmptySubtrees(const CsgTree& tree);
 
-/// withoutEmptySubtrees and normalizeTree, then, repeatedly, the first operation node (in depth-first
-/// order) that can be replaced by one of its operands, or lose an operand,
-/// with a fitness at least as high, is; until none can. The result's fitness
-/// is never lower than that of the input without its empty subtrees.
+/// withoutEmptySubtrees and normalizeTree, then, repeatedly, the first operation node (in
+/// depth-first order) that can be replaced by one of its operands, or lose an operand, with a
+/// fitness at least as high, is; until none can. The result's fitness is never lower than that of
+/// the input without its empty subtrees.
 /// @throw std::invalid_argument as FitnessModel::evaluate.
 CsgTree removeRedundancy(const CsgTree& tree, const FitnessModel& model);
 

@@ -51,7 +51,8 @@ struct Writer {
 
   void leaf(const Node& n, const std::string& pad, bool removes) const {
     const std::string& name = names.at(&n);
-    const Primitive p = removes && overcut > 0.0 ? grownPrimitive(n.primitive, overcut) : n.primitive;
+    const Primitive p =
+        removes && overcut > 0.0 ? grownPrimitive(n.primitive, overcut) : n.primitive;
     if (const auto* h = p.as<HalfSpace>()) {
       cube(pad, halfSpaceCube(*h, reach, bigEdge),
            name + ": halfspace " + formatVector(h->normal) + ".x <= " + formatNumber(h->offset));

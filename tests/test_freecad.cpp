@@ -46,8 +46,8 @@ CsgTree flushBoreFlange() {
   return CsgTree::subtract(
       {CsgTree::unite({CsgTree::leaf(Cylinder{Vec3(0, 0, 5), Vec3::UnitZ(), 45, 10}, "disc"),
                        CsgTree::leaf(Cylinder{Vec3(0, 0, 25), Vec3::UnitZ(), 22, 30}, "hub")}),
-       CsgTree::leaf(
-           Cylinder{Vec3(0, 0, 20), Vec3(std::sin(tilt), 0, std::cos(tilt)), 12, 40}, "bore")});
+       CsgTree::leaf(Cylinder{Vec3(0, 0, 20), Vec3(std::sin(tilt), 0, std::cos(tilt)), 12, 40},
+                     "bore")});
 }
 
 TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {

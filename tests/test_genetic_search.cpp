@@ -233,9 +233,8 @@ TEST(Redundancy, EmptySubtreesAreThoseProvablyEmpty) {
         CsgTree::subtract({CsgTree::unite({shaft, ball}), below(5.0)})}) {
     SCOPED_TRACE(k++);
     EXPECT_TRUE(withoutEmptySubtrees(CsgTree::unite({block, empty})).structurallyEqual(block));
-    EXPECT_TRUE(
-        withoutEmptySubtrees(CsgTree::subtract({block, empty, ball})).structurallyEqual(
-            CsgTree::subtract({block, ball})));
+    EXPECT_TRUE(withoutEmptySubtrees(CsgTree::subtract({block, empty, ball}))
+                    .structurallyEqual(CsgTree::subtract({block, ball})));
   }
   // Crossing the plane, or not provably apart: kept, the tree untouched.
   k = 0;
