@@ -64,11 +64,12 @@ TopoDS_Shape cube(const StandInCube& c) { return cube(c.frame, c.center, Vec3::C
 struct Builder {
   const StepOptions& options;
   const std::unordered_map<const Node*, std::string>& names;
-  Aabb extent;
+  Aabb extent;  // the part's extent (exportExtent): the scale of tolerances
+  Aabb reach;   // what the stand-ins of unbounded sets cover (standInExtent)
   double bigEdge = 0.0;
 
   TopoDS_Shape primitive(const Primitive& p) const {
-    if (const auto* h = p.as<HalfSpace>()) return cube(halfSpaceCube(*h, extent, bigEdge));
+    if (const auto* h = p.as<HalfSpace>()) return cube(halfSpaceCube(*h, reach, bigEdge));
     if (const auto* b = p.as<Box>()) return cube(b->axes, b->center, 2.0 * b->halfSize);
     if (const auto* c = p.as<Cylinder>()) {
       const gp_Ax2 ax(pnt(c->center - 0.5 * c->height * c->axis), dir(c->axis));
@@ -201,7 +202,7 @@ struct Builder {
         return boolean(op, *base, tools, n, path);
       }
       case NodeKind::Complement: {
-        const TopoDS_Shape all = cube(surroundingCube(extent, bigEdge));
+        const TopoDS_Shape all = cube(surroundingCube(reach, bigEdge));
         const auto s = child(n, 0, path);
         if (!s) return all;
         TopTools_ListOfShape tools;
@@ -337,12 +338,25 @@ Candidate unified(const Candidate& c) {
 // must be the tree's (sampled in `box`; no test when the tolerance is 0).
 struct VolumeCheck {
   const StepOptions& options;
+  const CsgTree& tree;
   Aabb box;
-  double sampled = 0.0;
+  mutable double sampled = 0.0;
+  mutable bool fine = false;
 
+  // 48 cells across the box can miss the volume by a few per cent where a
+  // small part lies beside a large piece (a far cylinder's segment beside a
+  // block): a solid that disagrees is judged again against a finer sample,
+  // taken once.
   bool agrees(const Candidate& c) const {
-    return options.volumeTolerance <= 0.0 ||
-           volumesAgree(c.volume, sampled, box, options.volumeTolerance);
+    if (options.volumeTolerance <= 0.0 ||
+        volumesAgree(c.volume, sampled, box, options.volumeTolerance)) {
+      return true;
+    }
+    if (!fine) {
+      sampled = sampledVolume(tree, box, 160);
+      fine = true;
+    }
+    return volumesAgree(c.volume, sampled, box, options.volumeTolerance);
   }
   // One valid solid of the tree's volume.
   bool good(const Candidate& c) const { return c.valid && c.solids == 1 && agrees(c); }
@@ -360,7 +374,8 @@ struct BrepAttempts {
   const CsgTree& tree;
   const StepOptions& options;
   Aabb extent;
-  double edge = 0.0;  // of the cubes standing in for half-spaces
+  Aabb reach;         // what the cubes standing in for half-spaces must cover
+  double edge = 0.0;  // of those cubes
   std::vector<Built> tries{};
   std::optional<CadError> firstError{};
 
@@ -369,7 +384,7 @@ struct BrepAttempts {
     const auto names = leafNames(t);
     StepOptions o = options;
     o.fuzzy = fuzzy;
-    const Builder b{o, names, extent, edge};
+    const Builder b{o, names, extent, reach, edge};
     try {
       NodePath path;
       const std::optional<TopoDS_Shape> shape = b.node(*t.root(), path);
@@ -441,7 +456,7 @@ std::string firstWrongOperation(const CsgTree& tree, const Builder& b, const Aab
 [[noreturn]] void failBuild(const BrepAttempts& a, const VolumeCheck& check) {
   if (a.tries.empty()) throw *a.firstError;
   const auto names = leafNames(a.tree);
-  const Builder b{a.options, names, a.extent, a.edge};
+  const Builder b{a.options, names, a.extent, a.reach, a.edge};
   if (check.agrees(a.tries.front().solid)) {
     throw CadError("OpenCASCADE built an invalid solid for " +
                    b.nodeText(*a.tree.root(), NodePath{}));
@@ -469,12 +484,13 @@ void nameFaces(BrepResult& result, const CsgTree& tree, double diagonal) {
 BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   tree.validate();
   const Aabb extent = exportExtent(tree);
-  const double edge = options.halfSpaceScale * std::max(extent.diagonal(), 1e-9);
+  const Aabb reach = standInExtent(tree);
+  const double edge = options.halfSpaceScale * std::max(reach.diagonal(), 1e-9);
   const Aabb box = extent.grown(0.01 * extent.diagonal());
-  const VolumeCheck check{options, box,
+  const VolumeCheck check{options, tree, box,
                           options.volumeTolerance > 0.0 ? sampledVolume(tree, box, 48) : 0.0};
 
-  BrepAttempts a{tree, options, extent, edge};
+  BrepAttempts a{tree, options, extent, reach, edge};
   auto done = [&] { return !a.tries.empty() && check.good(a.tries.back().solid); };
   // The tree as it is; then, until one is a valid solid of the tree's
   // volume: its near-coincident caps snapped (pieces that a sliver of the

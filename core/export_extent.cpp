@@ -1,5 +1,6 @@
 #include "core/export_extent.h"
 
+#include <algorithm>
 #include <array>
 #include <stdexcept>
 
@@ -41,9 +42,24 @@ Aabb exportExtent(const CsgTree& tree) {
   return part;
 }
 
+Aabb standInExtent(const CsgTree& tree) {
+  Aabb reach = exportExtent(tree);
+  for (const Node* leaf : tree.leaves()) {
+    if (leaf->primitive.isBounded()) reach.extend(leaf->primitive.bounds());
+  }
+  const Aabb solid = tree.bounds();
+  if (solid.isBounded()) reach.extend(solid);
+  return reach;
+}
+
 StandInCube halfSpaceCube(const HalfSpace& h, const Aabb& extent, double edge) {
   const Vec3 c = extent.center();
-  const Vec3 onPlane = c - (h.normal.dot(c) - h.offset) * h.normal;
+  // A point of the extent lies within half its diagonal of c: the cube must
+  // reach that far beside the plane's nearest point and below the plane by
+  // the plane's height above c as well.
+  const double above = h.offset - h.normal.dot(c);
+  edge = std::max(edge, std::max(0.0, above) + extent.diagonal());
+  const Vec3 onPlane = c + above * h.normal;
   return {frameFromAxis(h.normal), onPlane - 0.5 * edge * h.normal, edge};
 }
 

@@ -26,10 +26,22 @@ Box canonicalBox(const Box& box);
 ///        primitives give no extent.
 Aabb exportExtent(const CsgTree& tree);
 
-/// The cube of edge `edge` standing in for `halfSpace` near `extent`: its top
-/// face lies in the half-space's plane, centred on the point of the plane
-/// nearest the extent's centre, so that it covers the part's side of the
-/// plane when `edge` is at least twice the extent's diagonal.
+/// The box that the stand-ins of the tree's half-spaces and complements
+/// cover: the bounds of every bounded primitive of the tree, with the tree's
+/// own bounds when those are finite (a block cut from half-spaces). Every
+/// operand a half-space is combined with lies in it, so a stand-in that
+/// agrees with its half-space in this box gives the tree's exact solid
+/// (a primitive that reaches far outside the part, as a large fitted
+/// cylinder, is cut where it lies, not where the part does).
+/// @throw std::invalid_argument as exportExtent().
+Aabb standInExtent(const CsgTree& tree);
+
+/// The cube standing in for `halfSpace` in `extent` (standInExtent()): its
+/// top face lies in the half-space's plane, centred on the point of the
+/// plane nearest the extent's centre. Its edge is `edge`, or more where the
+/// plane lies far beyond the extent's centre: with `edge` at least the
+/// extent's diagonal the cube holds every point of the extent inside the
+/// half-space.
 StandInCube halfSpaceCube(const HalfSpace& halfSpace, const Aabb& extent, double edge);
 
 /// The world-aligned cube of edge `edge` centred on the extent: the

@@ -1,6 +1,9 @@
 #include "evolve/redundancy.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
 
 #include "evolve/tree_variation.h"
 
@@ -63,6 +66,131 @@ NodePtr normalizeNode(const NodePtr& node) {
   return std::make_shared<const Node>(node->kind, std::move(children));
 }
 
+constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+
+// Support of a primitive along the unit direction u: the largest u·x over
+// its solid (infinite when unbounded that way).
+double support(const Primitive& p, const Vec3& u) {
+  // sin of the angle between u and an axis: how far a circle about the
+  // axis reaches along u, per unit radius.
+  const auto across = [&u](const Vec3& axis) {
+    const double c = axis.dot(u);
+    return std::sqrt(std::max(0.0, 1.0 - c * c));
+  };
+  if (const auto* h = p.as<HalfSpace>()) {
+    return h->normal.dot(u) >= 1.0 - 1e-12 ? h->offset : kUnbounded;
+  }
+  if (const auto* b = p.as<Box>()) {
+    return b->center.dot(u) + (b->axes.transpose() * u).cwiseAbs().dot(b->halfSize);
+  }
+  if (const auto* c = p.as<Cylinder>()) {
+    return c->center.dot(u) + 0.5 * c->height * std::abs(c->axis.dot(u)) +
+           c->radius * across(c->axis);
+  }
+  if (const auto* k = p.as<Cone>()) {
+    const double along = 0.5 * k->height * k->axis.dot(u);
+    return k->center.dot(u) + std::max(-along + k->radiusBottom * across(k->axis),
+                                       along + k->radiusTop * across(k->axis));
+  }
+  if (const auto* s = p.as<Sphere>()) return s->center.dot(u) + s->radius;
+  const Torus& t = std::get<Torus>(p.shape());
+  return t.center.dot(u) + t.majorRadius * across(t.axis) + t.minorRadius;
+}
+
+// An upper bound of u·x over the node's solid.
+double support(const Node& n, const Vec3& u) {
+  switch (n.kind) {
+    case NodeKind::Primitive:
+      return support(n.primitive, u);
+    case NodeKind::Complement:
+      return kUnbounded;
+    case NodeKind::Difference:
+      return support(*n.children.front(), u);
+    case NodeKind::Union: {
+      double s = -kUnbounded;
+      for (const NodePtr& c : n.children) s = std::max(s, support(*c, u));
+      return s;
+    }
+    case NodeKind::Intersection: {
+      double s = kUnbounded;
+      for (const NodePtr& c : n.children) s = std::min(s, support(*c, u));
+      return s;
+    }
+  }
+  return kUnbounded;
+}
+
+// The half-space an operand is, read through a complement: {normal·x <=
+// offset} or, complemented, its closure's opposite; nullopt for any other.
+std::optional<HalfSpace> asHalfSpace(const Node& operand) {
+  const Node* leaf = &operand;
+  bool flipped = false;
+  if (leaf->kind == NodeKind::Complement) {
+    leaf = leaf->children.front().get();
+    flipped = true;
+  }
+  if (leaf->kind != NodeKind::Primitive) return std::nullopt;
+  const HalfSpace* h = leaf->primitive.as<HalfSpace>();
+  if (!h) return std::nullopt;
+  return flipped ? HalfSpace{-h->normal, -h->offset} : *h;
+}
+
+// Whether `x` has no volume inside the half-space h: x lies on or beyond
+// its plane (up to a relative rounding slack).
+bool beyond(const Node& x, const HalfSpace& h) {
+  const double lowest = -support(x, -h.normal);
+  return std::isfinite(lowest) &&
+         lowest >= h.offset - 1e-9 * (std::abs(h.offset) + std::abs(lowest));
+}
+
+// Whether the operation's solid provably has no volume, its operands being
+// non-empty.
+bool provablyEmpty(const NodePtr& node) {
+  const Node& n = *node;
+  if (n.kind != NodeKind::Intersection && n.kind != NodeKind::Difference) return false;
+  if (CsgTree(node).bounds().isEmpty()) return true;
+  const bool difference = n.kind == NodeKind::Difference;
+  // The operands intersected: a difference's cutters as the sets they leave.
+  for (std::size_t i = difference ? 1 : 0; i < n.children.size(); ++i) {
+    std::optional<HalfSpace> h = asHalfSpace(*n.children[i]);
+    if (!h) continue;
+    if (difference) h = HalfSpace{-h->normal, -h->offset};  // what the cut leaves
+    for (std::size_t j = 0; j < n.children.size(); ++j) {
+      if (j == i || (difference && j > 0)) continue;
+      if (beyond(*n.children[j], *h)) return true;
+    }
+  }
+  return false;
+}
+
+// The node without its empty subtrees; nullptr when its solid is empty.
+NodePtr pruneEmpty(const NodePtr& node) {
+  if (node->kind == NodeKind::Primitive) return node;
+  if (node->kind == NodeKind::Complement) {
+    const NodePtr inner = pruneEmpty(node->children.front());
+    if (!inner || inner == node->children.front()) return node;  // everything: left as it was
+    return std::make_shared<const Node>(NodeKind::Complement, std::vector<NodePtr>{inner});
+  }
+  std::vector<NodePtr> children;
+  bool changed = false;
+  for (std::size_t k = 0; k < node->children.size(); ++k) {
+    NodePtr c = pruneEmpty(node->children[k]);
+    if (!c) {
+      if (node->kind == NodeKind::Intersection) return nullptr;
+      if (node->kind == NodeKind::Difference && k == 0) return nullptr;
+      changed = true;
+      continue;
+    }
+    changed = changed || c != node->children[k];
+    children.push_back(std::move(c));
+  }
+  if (children.empty()) return nullptr;
+  if (children.size() == 1) return children.front();
+  const NodePtr pruned =
+      changed ? std::make_shared<const Node>(node->kind, std::move(children)) : node;
+  return provablyEmpty(pruned) ? nullptr : pruned;
+}
+
 // The variants of the tree with the operation at `path` simplified: replaced
 // by each operand, or (n-ary) without one operand.
 std::vector<CsgTree> simplerVariants(const CsgTree& tree, const NodePath& path) {
@@ -92,8 +220,14 @@ CsgTree normalizeTree(const CsgTree& tree) {
   return root ? CsgTree(root) : tree;
 }
 
+CsgTree withoutEmptySubtrees(const CsgTree& tree) {
+  if (tree.empty()) return tree;
+  const NodePtr root = pruneEmpty(tree.root());
+  return root ? CsgTree(root) : tree;
+}
+
 CsgTree removeRedundancy(const CsgTree& tree, const FitnessModel& model) {
-  CsgTree current = normalizeTree(tree);
+  CsgTree current = normalizeTree(withoutEmptySubtrees(tree));
   double best = model.evaluate(current).total;
   // The normalised tree is the same solid with fewer nodes: never worse.
   bool improved = true;

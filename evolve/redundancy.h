@@ -18,10 +18,24 @@ namespace csgvox {
 /// returned as it was.
 CsgTree normalizeTree(const CsgTree& tree);
 
-/// normalizeTree, then, repeatedly, the first operation node (in depth-first
-/// order) that can be replaced by one of its operands, or lose an operand,
-/// with a fitness at least as high, is; until none can. The result's fitness
-/// is never lower than the input's.
+/// The tree without the subtrees whose solid is provably empty (or of no
+/// volume): a difference whose first operand lies inside a subtracted
+/// half-space (or outside a subtracted complement of one), an intersection
+/// of an operand with a half-space wholly beyond it, an operation whose
+/// operands' bounds do not meet (CsgTree::bounds()); with them, an operation
+/// left with one operand is replaced by it. An empty operand is dropped from
+/// a union and from a difference's cutters, and empties an intersection and
+/// a difference it is cut from. The solid is unchanged; so is a tree that
+/// holds no such subtree, or that is empty as a whole. Such a subtree
+/// changes no point of the solid, yet its field can stand near zero at scan
+/// points, which a fitness at the points would reward, and exports that
+/// write half-spaces as finite solids must otherwise cut it exactly.
+CsgTree withoutEmptySubtrees(const CsgTree& tree);
+
+/// withoutEmptySubtrees and normalizeTree, then, repeatedly, the first operation node (in
+/// depth-first order) that can be replaced by one of its operands, or lose an operand, with a
+/// fitness at least as high, is; until none can. The result's fitness is never lower than that of
+/// the input without its empty subtrees.
 /// @throw std::invalid_argument as FitnessModel::evaluate.
 CsgTree removeRedundancy(const CsgTree& tree, const FitnessModel& model);
 

@@ -3,6 +3,7 @@
 #include <ostream>
 #include <string>
 
+#include "core/export_cutters.h"
 #include "core/export_extent.h"
 #include "io/file_util.h"
 #include "io/tree_names.h"
@@ -31,8 +32,9 @@ const char* kExact = "$fn = 0, $fa = 12, $fs = 2";
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
-  Aabb extent;
+  Aabb reach;  // what the stand-ins of unbounded sets cover (standInExtent)
   double bigEdge = 0.0;
+  double overcut = 0.0;  // how much a primitive that removes material is grown
 
   void placed(const std::string& pad, const Mat3& frame, const Vec3& t, const std::string& body,
               const std::string& comment) const {
@@ -47,11 +49,12 @@ struct Writer {
            comment);
   }
 
-  void leaf(const Node& n, const std::string& pad) const {
+  void leaf(const Node& n, const std::string& pad, bool removes) const {
     const std::string& name = names.at(&n);
-    const Primitive& p = n.primitive;
+    const Primitive p =
+        removes && overcut > 0.0 ? grownPrimitive(n.primitive, overcut) : n.primitive;
     if (const auto* h = p.as<HalfSpace>()) {
-      cube(pad, halfSpaceCube(*h, extent, bigEdge),
+      cube(pad, halfSpaceCube(*h, reach, bigEdge),
            name + ": halfspace " + formatVector(h->normal) + ".x <= " + formatNumber(h->offset));
     } else if (const auto* b0 = p.as<Box>()) {
       const Box b = canonicalBox(*b0);
@@ -83,43 +86,47 @@ struct Writer {
     }
   }
 
-  void node(const Node& n, int indent) const {
+  // `removes`: the node's material is removed from the part (it lies
+  // under an odd number of subtracted operands).
+  void node(const Node& n, int indent, bool removes) const {
     const std::string pad(std::size_t(2 * indent), ' ');
     switch (n.kind) {
       case NodeKind::Primitive:
-        leaf(n, pad);
+        leaf(n, pad, removes);
         return;
       case NodeKind::Complement:
         out << pad << "difference() {\n";
-        cube(pad + "  ", surroundingCube(extent, bigEdge), "everything around the part");
-        node(*n.children.front(), indent + 1);
+        cube(pad + "  ", surroundingCube(reach, bigEdge), "everything around the part");
+        node(*n.children.front(), indent + 1, !removes);
         out << pad << "}\n";
         return;
       case NodeKind::Intersection:
-        intersection(n, 0, indent);
+        intersection(n, 0, indent, removes);
         return;
       default:
         if (n.children.size() == 1) {
-          node(*n.children.front(), indent);
+          node(*n.children.front(), indent, removes);
           return;
         }
         out << pad << nodeKindName(n.kind) << "() {\n";
-        for (const NodePtr& c : n.children) node(*c, indent + 1);
+        for (std::size_t i = 0; i < n.children.size(); ++i) {
+          node(*n.children[i], indent + 1, removes != subtractsOperand(n, i));
+        }
         out << pad << "}\n";
     }
   }
 
   // The intersection of children first.. as nested pairs: FreeCAD's
   // importer (0.20) fails on an intersection of one or of more than two.
-  void intersection(const Node& n, std::size_t first, int indent) const {
+  void intersection(const Node& n, std::size_t first, int indent, bool removes) const {
     if (first + 1 == n.children.size()) {
-      node(*n.children[first], indent);
+      node(*n.children[first], indent, removes);
       return;
     }
     const std::string pad(std::size_t(2 * indent), ' ');
     out << pad << "intersection() {\n";
-    node(*n.children[first], indent + 1);
-    intersection(n, first + 1, indent + 1);
+    node(*n.children[first], indent + 1, removes);
+    intersection(n, first + 1, indent + 1, removes);
     out << pad << "}\n";
   }
 };
@@ -129,10 +136,17 @@ struct Writer {
 void writeCsg(std::ostream& out, const CsgTree& tree, const CsgOptions& options) {
   const Aabb extent = exportExtent(tree);
   const auto names = leafNames(tree);
-  const Writer w{out, names, extent, options.halfSpaceScale * std::max(extent.diagonal(), 1e-9)};
+  const Aabb reach = standInExtent(tree);
+  const Writer w{out, names, reach, options.halfSpaceScale * std::max(reach.diagonal(), 1e-9),
+                 options.overcut * extent.diagonal()};
   out << "// CSG tree written by csgvox in OpenSCAD's CSG format; units are the scan's.\n"
       << "// FreeCAD opens it as a feature tree (File > Open, importCSG).\n";
-  w.node(*tree.root(), 0);
+  if (w.overcut > 0.0 && !leafRoles(tree).removing.empty()) {
+    out << "// Primitives that cut are written " << formatNumber(w.overcut)
+        << " larger on every side, so that a hole\n"
+           "// ending on the face it goes through cuts that face.\n";
+  }
+  w.node(*tree.root(), 0, false);
 }
 
 void writeCsg(const std::filesystem::path& path, const CsgTree& tree, const CsgOptions& options) {

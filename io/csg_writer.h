@@ -7,7 +7,10 @@
 /// feature tree, with no OpenSCAD installed: each primitive an editable Part
 /// feature, each operation a boolean. Curved primitives are exact ($fn = 0).
 /// Half-spaces and complements become cubes much larger than the part that
-/// clip it as they do (as in tree.scad).
+/// clip it as they do (as in tree.scad). As in tree.scad, a primitive that
+/// removes material is written grown by `overcut` (core/export_cutters.h):
+/// FreeCAD's cut of coplanar faces fails silently (a bore flush with the
+/// faces it goes through was cut through one of its solids only).
 
 #include <filesystem>
 #include <iosfwd>
@@ -19,6 +22,8 @@ namespace csgvox {
 /// Options of the CSG export.
 struct CsgOptions {
   double halfSpaceScale = 2.0;  ///< edge of the half-space cubes, multiple of the part's diagonal
+  double overcut = 1e-6;        ///< a removing primitive's faces move out by this, fraction of the
+                                ///< part's diagonal (0: written as they are)
 };
 
 /// Writes the tree as OpenSCAD CSG; each primitive carries its name in a

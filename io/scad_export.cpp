@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <ostream>
 #include <set>
@@ -9,6 +10,7 @@
 #include <string>
 #include <variant>
 
+#include "core/export_cutters.h"
 #include "core/export_extent.h"
 #include "io/file_util.h"
 #include "io/tree_names.h"
@@ -51,55 +53,43 @@ std::string rotateEuler(const Mat3& r) {
   return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
 }
 
-// `p` with every face moved out by `m` (a cone keeps its slope).
-Primitive grown(const Primitive& p, double m) {
-  PrimitiveShape s = p.shape();
-  if (auto* h = std::get_if<HalfSpace>(&s)) {
-    h->offset += m;
-  } else if (auto* b = std::get_if<Box>(&s)) {
-    b->halfSize.array() += m;
-  } else if (auto* c = std::get_if<Cylinder>(&s)) {
-    c->radius += m;
-    c->height += 2.0 * m;
-  } else if (auto* k = std::get_if<Cone>(&s)) {
-    const double slope = (k->radiusTop - k->radiusBottom) / k->height;
-    k->radiusBottom = std::max(0.0, k->radiusBottom - slope * m) + m;
-    k->radiusTop = std::max(0.0, k->radiusTop + slope * m) + m;
-    k->height += 2.0 * m;
-  } else if (auto* sp = std::get_if<Sphere>(&s)) {
-    sp->radius += m;
-  } else if (auto* t = std::get_if<Torus>(&s)) {
-    t->minorRadius += m;
+// Sides of a polygon inscribed in a circle of radius r whose chords stay
+// within `tolerance` of the circle (sagitta r·(1 − cos(π/n))), rounded up to
+// the next of 8, 12, 16, 24, 32, 48, 64, 96, ... (multiples of four, so the
+// circle's extremes along its frame's axes are vertices; and coaxial
+// surfaces of close radii, a thin wall's two sides, get the same count, so
+// their vertices line up and the wall keeps its thickness), clamped to
+// [lo, hi].
+int segmentsFor(double r, double tolerance, int lo, int hi) {
+  double exact = double(hi);
+  if (tolerance >= r) {
+    exact = double(lo);
+  } else if (tolerance > 0.0) {
+    exact = std::numbers::pi / std::acos(1.0 - tolerance / r);
   }
-  return Primitive(s);
+  int n = 8;
+  for (int k = 0; n < exact && n < hi; ++k) n = (k % 2 == 0) ? n * 3 / 2 : n * 4 / 3;
+  return std::clamp(n, lo, hi);
 }
 
-// Whether child i of `n` removes what it holds from the rest: a
-// difference's operands after the first, and the operand of a complement.
-bool subtracts(const Node& n, std::size_t i) {
-  return n.kind == NodeKind::Complement || (n.kind == NodeKind::Difference && i > 0);
-}
-
-// The leaves that add material (reached through an even number of
-// subtracting children) and those that remove it.
-void collectUses(const Node& n, bool removes, std::set<const Node*>& adds,
-                 std::set<const Node*>& removed) {
-  if (n.kind == NodeKind::Primitive) {
-    (removes ? removed : adds).insert(&n);
-    return;
-  }
-  for (std::size_t i = 0; i < n.children.size(); ++i) {
-    collectUses(*n.children[i], removes != subtracts(n, i), adds, removed);
-  }
-}
+std::string segmentsText(int n) { return "$fn = segments(" + std::to_string(n) + ")"; }
 
 struct Writer {
   std::ostream& out;
   const std::unordered_map<const Node*, std::string>& names;
   // The grown module of each leaf that both adds and removes material.
   const std::unordered_map<const Node*, std::string>& cutNames;
-  Aabb part;           // the part's extent (exportExtent)
+  Aabb reach;          // what the stand-ins of unbounded sets cover (standInExtent)
   double bigSize = 0;  // edge of the cubes standing in for unbounded sets
+  const ScadOptions& options;
+  double tolerance = 0.0;  // chord tolerance, scan units
+
+  // $fn of a circle of radius r (`coarser`: multiple of the tolerance).
+  std::string fn(double r, double coarser = 1.0, int lo = 0) const {
+    if (options.facets > 0) return segmentsText(options.facets);
+    return segmentsText(segmentsFor(r, coarser * tolerance, std::max(lo, options.minSegments),
+                                    options.maxSegments));
+  }
 
   std::string cube(const StandInCube& c) const {
     return translate(c.center) + rotateEuler(c.frame) + "cube(" + vec(Vec3::Constant(c.edge)) +
@@ -109,7 +99,7 @@ struct Writer {
   std::string body(const Primitive& p) const {
     if (const auto* h = p.as<HalfSpace>()) {
       // A slab of the half-space covering the part: its top face is the plane.
-      return cube(halfSpaceCube(*h, part, bigSize)) + "  // halfspace " + vec(h->normal) +
+      return cube(halfSpaceCube(*h, reach, bigSize)) + "  // halfspace " + vec(h->normal) +
              ".x <= " + formatNumber(h->offset);
     }
     if (const auto* b0 = p.as<Box>()) {
@@ -119,20 +109,23 @@ struct Writer {
     }
     if (const auto* c = p.as<Cylinder>()) {
       return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " + formatNumber(c->height) +
-             ", r = " + formatNumber(c->radius) + ", center = true);";
+             ", r = " + formatNumber(c->radius) + ", center = true, " + fn(c->radius) + ");";
     }
     if (const auto* c = p.as<Cone>()) {
       return translate(c->center) + rotateZTo(c->axis) + "cylinder(h = " + formatNumber(c->height) +
              ", r1 = " + formatNumber(c->radiusBottom) + ", r2 = " + formatNumber(c->radiusTop) +
-             ", center = true);";
+             ", center = true, " + fn(std::max(c->radiusBottom, c->radiusTop)) + ");";
     }
     if (const auto* s = p.as<Sphere>()) {
-      return translate(s->center) + "sphere(r = " + formatNumber(s->radius) + ");";
+      return translate(s->center) + "sphere(r = " + formatNumber(s->radius) + ", " +
+             fn(s->radius, options.surfaceCoarsening) + ");";
     }
     if (const auto* t = p.as<Torus>()) {
-      return translate(t->center) + rotateZTo(t->axis) + "rotate_extrude() translate([" +
+      // Its tube swept round the axis: both circles' segments multiply.
+      return translate(t->center) + rotateZTo(t->axis) + "rotate_extrude(" +
+             fn(t->majorRadius + t->minorRadius, options.surfaceCoarsening) + ") translate([" +
              formatNumber(t->majorRadius) + ", 0]) circle(r = " + formatNumber(t->minorRadius) +
-             ");";
+             ", " + fn(t->minorRadius, options.surfaceCoarsening, options.minTubeSegments) + ");";
     }
     return "";
   }
@@ -145,15 +138,15 @@ struct Writer {
         return;
       case NodeKind::Complement:
         out << pad << "difference() {\n"
-            << pad << "  " << cube(surroundingCube(part, bigSize))
+            << pad << "  " << cube(surroundingCube(reach, bigSize))
             << "  // everything around the part\n";
-        node(*n.children.front(), indent + 1, removes != subtracts(n, 0));
+        node(*n.children.front(), indent + 1, removes != subtractsOperand(n, 0));
         out << pad << "}\n";
         return;
       default:
         out << pad << nodeKindName(n.kind) << "() {\n";
         for (std::size_t i = 0; i < n.children.size(); ++i) {
-          node(*n.children[i], indent + 1, removes != subtracts(n, i));
+          node(*n.children[i], indent + 1, removes != subtractsOperand(n, i));
         }
         out << pad << "}\n";
     }
@@ -165,8 +158,9 @@ struct Writer {
 void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options) {
   const Aabb part = exportExtent(tree);
   const auto names = leafNames(tree);
-  std::set<const Node*> adds, removes;
-  collectUses(*tree.root(), false, adds, removes);
+  const LeafRoles roles = leafRoles(tree);
+  const auto& adds = roles.adding;
+  const auto& removes = roles.removing;
   const double overcut = options.overcut * part.diagonal();
   std::unordered_map<const Node*, std::string> cutNames;
   std::set<std::string> taken;
@@ -179,7 +173,10 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
     taken.insert(name);
     cutNames[leaf] = name;
   }
-  Writer w{out, names, cutNames, part, options.halfSpaceScale * std::max(part.diagonal(), 1e-9)};
+  const Aabb reach = standInExtent(tree);
+  const double tolerance = options.chordTolerance * part.diagonal();
+  const double edge = options.halfSpaceScale * std::max(reach.diagonal(), 1e-9);
+  Writer w{out, names, cutNames, reach, edge, options, tolerance};
   out << "// CSG tree written by csgvox. Units are those of the scan.\n"
       << "// Each primitive is a module below; the solid is the expression at the end.\n";
   if (overcut > 0.0 && !removes.empty()) {
@@ -187,7 +184,17 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
         << " larger on every side, so that a hole\n"
            "// ending on the face it goes through leaves no film of that face.\n";
   }
-  out << "$fn = " << options.facets << ";\n\n";
+  char within[96];
+  std::snprintf(within, sizeof within, "%.3g of the true surface (%.3g on spheres and tori)",
+                tolerance, options.surfaceCoarsening * tolerance);
+  out << "// Curved primitives are polygons of segments(n) sides, n chosen from their size so\n"
+         "// that facets lie within "
+      << within
+      << ".\n"
+         "// For a finer render raise detail: 2 doubles every count (facets 4x closer),\n"
+         "// and makes rendering (F6) several times slower.\n"
+      << "detail = 1;\n"
+      << "function segments(n) = max(3, round(n * detail));\n\n";
   std::set<const Node*> seen;
   for (const Node* leaf : tree.leaves()) {
     if (!seen.insert(leaf).second) continue;
@@ -198,7 +205,7 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
     }
     if (cuts) {
       out << "module " << (cutNames.count(leaf) ? cutNames.at(leaf) : name) << "() "
-          << w.body(grown(leaf->primitive, overcut)) << "\n";
+          << w.body(grownPrimitive(leaf->primitive, overcut)) << "\n";
     }
   }
   out << "\n";

@@ -8,6 +8,13 @@
 /// face it goes through (as the fitted tree places it, to the last bits)
 /// would otherwise leave a film of that face across it or not, as the
 /// rounding falls.
+///
+/// Curved primitives are written with a segment count ($fn) each, chosen
+/// from their radius so that their facets stay within a tolerance of the
+/// true surface: OpenSCAD's render time grows fast with facets (a torus has
+/// the product of its sweep's and its tube's), and one $fn for every curve
+/// made a turned part with 11 tori render for minutes. The file starts with
+/// a `detail` variable that scales every count, for a finer render.
 
 #include <filesystem>
 #include <iosfwd>
@@ -18,7 +25,14 @@ namespace csgvox {
 
 /// Options of the OpenSCAD export.
 struct ScadOptions {
-  int facets = 64;              ///< $fn: segments of a full circle for curved primitives
+  double chordTolerance = 2e-4;    ///< largest distance of a curve's facets from it, fraction of
+                                   ///< the part's diagonal
+  double surfaceCoarsening = 2.5;  ///< spheres' and tori's tolerance, multiple of chordTolerance
+                                   ///< (their facets are the square of a circle's)
+  int minSegments = 12;            ///< fewest segments of a full circle
+  int minTubeSegments = 8;         ///< fewest segments of a torus's tube
+  int maxSegments = 96;            ///< most segments of a full circle
+  int facets = 0;  ///< when > 0: every curve's segments, whatever its size (else chosen as above)
   double halfSpaceScale = 2.0;  ///< size of half-space boxes, multiple of the part's diagonal
   double overcut = 1e-6;        ///< a removing primitive's faces move out by this, fraction of the
                                 ///< part's diagonal (0: written as they are)

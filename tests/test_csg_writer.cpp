@@ -12,6 +12,7 @@
 #include "io/csg_writer.h"
 #include "io/errors.h"
 #include "io/tree_json.h"
+#include "io/tree_names.h"
 #include "part_list.h"
 #include "solid_sampling.h"
 #include "temp_dir_test.h"
@@ -62,18 +63,32 @@ TEST(CsgFormat, WritesExactSolidsThatFreeCadTurnsIntoPartFeatures) {
       CsgTree::leaf(Box{Vec3(0, 0, 2.5), Mat3::Identity(), Vec3(40, 30, 2.5)}, "plate");
   const CsgTree hole = CsgTree::leaf(Cylinder{Vec3(30, 20, 2.5), Vec3::UnitZ(), 4, 7}, "hole");
   const CsgTree ring = CsgTree::leaf(Torus{Vec3(0, 0, 5), Vec3::UnitX(), 10, 2}, "ring");
-  const std::string text = csgText(CsgTree::subtract({CsgTree::unite({plate, ring}), hole}));
+  const CsgTree tree = CsgTree::subtract({CsgTree::unite({plate, ring}), hole});
+  const std::string text = csgText(tree);
   EXPECT_NE(text.find("difference() {\n  union() {"), std::string::npos) << text;
   EXPECT_NE(text.find("multmatrix([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2.5], [0, 0, 0, 1]]) {\n"
                       "      cube(size = [80, 60, 5], center = true);  // plate"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("cylinder($fn = 0, $fa = 12, $fs = 2, h = 7, r1 = 4, r2 = 4, center = "
-                      "true);  // hole"),
+  // The hole cuts: it is written larger by the overcut (1e-6 of the part's
+  // diagonal) on every side, as in tree.scad, so that FreeCAD cuts the faces
+  // it ends on; what adds material is written as it is.
+  const double m = 1e-6 * exportExtent(tree).diagonal();
+  EXPECT_NE(text.find("cylinder($fn = 0, $fa = 12, $fs = 2, h = " + formatNumber(7 + 2 * m) +
+                      ", r1 = " + formatNumber(4 + m) + ", r2 = " + formatNumber(4 + m) +
+                      ", center = true);  // hole"),
             std::string::npos)
       << text;
   EXPECT_NE(text.find("rotate_extrude(angle = 360, convexity = 2, $fn = 0"), std::string::npos);
   EXPECT_NE(text.find("circle($fn = 0, $fa = 12, $fs = 2, r = 2);"), std::string::npos);
+  CsgOptions exact;
+  exact.overcut = 0.0;
+  std::ostringstream out;
+  writeCsg(out, tree, exact);
+  EXPECT_NE(out.str().find("cylinder($fn = 0, $fa = 12, $fs = 2, h = 7, r1 = 4, r2 = 4, center = "
+                           "true);  // hole"),
+            std::string::npos)
+      << out.str();
 }
 
 TEST(CsgFormat, HalfSpacesBecomeCubesWhoseTopFaceIsThePlane) {
@@ -89,6 +104,32 @@ TEST(CsgFormat, HalfSpacesBecomeCubesWhoseTopFaceIsThePlane) {
   EXPECT_NEAR(standIn->center.dot(Vec3(1, 1, 0).normalized()) + standIn->halfSize.z(), 0.25, 1e-9);
   EXPECT_GE(standIn->halfSize.minCoeff(), 2 * std::sqrt(3.0) - 1e-9);  // the diagonal
   EXPECT_GE(test::stratifiedIou(tree, back, exportExtent(tree).grown(0.5), 40), 0.999);
+}
+
+// A half-space's cube covers everything the half-space is combined with,
+// not the part only: a cylinder of radius 10 D centred 5 D away from a block
+// of diagonal D, wholly under a plane, leaves nothing (a slab of it outside
+// the cube stayed, on a scanned plate of bosses), and one the plane crosses
+// leaves its far piece.
+TEST(CsgFormat, HalfSpaceCubesCoverPrimitivesReachingFarOutsideThePart) {
+  const CsgTree block = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(5, 4, 3)}, "block");
+  const double d = 2.0 * Vec3(5, 4, 3).norm();
+  const CsgTree cylinder =
+      CsgTree::leaf(Cylinder{Vec3(5 * d, 0, 0), Vec3::UnitZ(), 10 * d, 4}, "cylinder");
+  for (const CsgTree& cut :
+       {CsgTree::subtract({cylinder, CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 2.5})}),
+        CsgTree::subtract({cylinder, CsgTree::leaf(HalfSpace{Vec3::UnitX(), 13 * d})}),
+        CsgTree::intersect({cylinder, CsgTree::leaf(HalfSpace{-Vec3::UnitZ(), -2.5})}),
+        CsgTree::intersect({cylinder, CsgTree::leaf(HalfSpace{-Vec3::UnitX(), -13 * d})})}) {
+    const CsgTree tree = CsgTree::unite({block, cut});
+    const CsgTree back = roundTrip(tree);
+    const Aabb all = cylinder.bounds();
+    EXPECT_GE(test::stratifiedIou(tree, back, all, 60), 0.999);
+    // Written alone (when its bounds are not empty), it is cut by a cube
+    // covering the cylinder, not the part's sliver.
+    if (cut.bounds().isEmpty()) continue;
+    EXPECT_GE(test::stratifiedIou(cut, roundTrip(cut), all, 60), 0.999);
+  }
 }
 
 TEST(CsgReader, ReadsOpenScadsOwnSpellings) {

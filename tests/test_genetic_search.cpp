@@ -7,6 +7,9 @@
 #include "evolve/genetic_search.h"
 #include "evolve/redundancy.h"
 #include "evolve_fixtures.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -205,6 +208,66 @@ TEST(Redundancy, NormalizingDropsCancellingAndRepeatedOperands) {
   EXPECT_TRUE(normalizeTree(kept).structurallyEqual(kept));
   const CsgTree empty = CsgTree::subtract({a, a});
   EXPECT_TRUE(normalizeTree(empty).structurallyEqual(empty));
+}
+
+// What removeRedundancy drops first: the subtrees whose solid is empty.
+// An empty subtree changes no point of the solid, but a half-space in it
+// must be written as a finite cube that covers it (tree.scad, tree.step),
+// and its field can stand at zero on scan points.
+TEST(Redundancy, EmptySubtreesAreThoseProvablyEmpty) {
+  const CsgTree block = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(2, 2, 1)}, "block");
+  const CsgTree shaft = CsgTree::leaf(Cylinder{Vec3(5, 0, 0), Vec3::UnitX(), 1, 4}, "shaft");
+  const CsgTree ball = CsgTree::leaf(Sphere{Vec3(0, 0, 3), 1}, "ball");
+  const CsgTree ring = CsgTree::leaf(Torus{Vec3(0, 5, 0), Vec3(1, 1, 0).normalized(), 2, 0.5});
+  const CsgTree cone = CsgTree::leaf(Cone{Vec3(0, -5, 0), Vec3::UnitZ(), 1, 0.5, 2}, "cone");
+  const auto below = [](double z) { return CsgTree::leaf(HalfSpace{Vec3::UnitZ(), z}); };
+  // Inside the subtracted half-space (a cap on its plane too), beyond an
+  // intersected one, or outside a complemented one: empty.
+  int k = 0;
+  for (const CsgTree& empty :
+       {CsgTree::subtract({shaft, below(1.0)}), CsgTree::subtract({ring, below(2.5)}),
+        CsgTree::subtract({cone, below(1.0)}), CsgTree::intersect({below(1.9), ball}),
+        CsgTree::intersect({ball, CsgTree::complement(below(4.0))}),
+        CsgTree::subtract({ball, CsgTree::complement(below(1.0))}),
+        CsgTree::intersect({block, shaft}),  // bounds apart
+        CsgTree::subtract({CsgTree::unite({shaft, ball}), below(5.0)})}) {
+    SCOPED_TRACE(k++);
+    EXPECT_TRUE(withoutEmptySubtrees(CsgTree::unite({block, empty})).structurallyEqual(block));
+    EXPECT_TRUE(withoutEmptySubtrees(CsgTree::subtract({block, empty, ball}))
+                    .structurallyEqual(CsgTree::subtract({block, ball})));
+  }
+  // Crossing the plane, or not provably apart: kept, the tree untouched.
+  k = 0;
+  for (const CsgTree& kept :
+       {CsgTree::subtract({shaft, below(0.5)}), CsgTree::subtract({ring, below(1.0)}),
+        CsgTree::intersect({below(2.1), ball}),
+        CsgTree::intersect({block, CsgTree::leaf(Sphere{Vec3(0, 0, 1.5), 1})}),
+        CsgTree::subtract({cone, below(0.5)})}) {
+    SCOPED_TRACE(k++);
+    const CsgTree t = CsgTree::unite({block, kept});
+    EXPECT_EQ(withoutEmptySubtrees(t).root(), t.root());
+  }
+  // An empty tree as a whole is left as it was.
+  const CsgTree all = CsgTree::subtract({shaft, below(1.0)});
+  EXPECT_EQ(withoutEmptySubtrees(all).root(), all.root());
+}
+
+// The tree of a scanned plate of bosses (data/regressions): its subtree
+// difference(cylinder9, halfspace5) is empty, the cylinder (radius 214.8,
+// reaching x = 489 beside a part 150 wide) lying under the plane. It goes,
+// alone, and the solid stays the same.
+TEST(Redundancy, ThePlateOfBossesLosesItsEmptySubtree) {
+  const CsgTree tree =
+      readTreeJson(test::dataDir() / "regressions" / "halfspace-export-plate-of-bosses.json");
+  const CsgTree pruned = withoutEmptySubtrees(tree);
+  EXPECT_EQ(pruned.primitiveCount() + 2, tree.primitiveCount());
+  EXPECT_EQ(withoutEmptySubtrees(pruned).root(), pruned.root());
+  const Aabb box = tree.bounds();
+  test::Rng rng(3);
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 p = test::randomPoint(rng, box);
+    ASSERT_EQ(tree.contains(p), pruned.contains(p)) << test::str(p);
+  }
 }
 
 }  // namespace

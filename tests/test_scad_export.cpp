@@ -3,10 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include "io/mesh_files.h"
 #include "io/scad_export.h"
@@ -46,8 +48,9 @@ TEST(ScadExport, OneNamedModulePerPrimitiveThenTheExpression) {
   EXPECT_NE(s.find("module plate() translate([0, 0, 2.5]) cube([80, 60, 5], center = true);\n"),
             std::string::npos)
       << s;
-  EXPECT_NE(s.find("module hole() translate([30, 20, 2.5]) cylinder(h = 7, r = 4, center = true);"),
-            std::string::npos)
+  EXPECT_NE(
+      s.find("module hole() translate([30, 20, 2.5]) cylinder(h = 7, r = 4, center = true, $fn = "),
+      std::string::npos)
       << s;
   // A repeated name is made unique.
   EXPECT_NE(s.find("module hole_1() translate([-30, 20, 2.5])"), std::string::npos) << s;
@@ -64,9 +67,10 @@ TEST(ScadExport, CuttersAreWrittenGrownByTheOvercut) {
   EXPECT_NE(s.find("module plate() translate([0, 0, 2.5]) cube([80, 60, 5], center = true);\n"),
             std::string::npos)
       << s;
-  EXPECT_NE(s.find("module hole() translate([30, 20, 2.5]) cylinder(h = " +
-                   formatNumber(7 + 2 * m) + ", r = " + formatNumber(4 + m) + ", center = true);"),
-            std::string::npos)
+  EXPECT_NE(
+      s.find("module hole() translate([30, 20, 2.5]) cylinder(h = " + formatNumber(7 + 2 * m) +
+             ", r = " + formatNumber(4 + m) + ", center = true, $fn = "),
+      std::string::npos)
       << s;
   EXPECT_NE(s.find("difference() {\n  plate();\n  hole();\n  hole_1();\n}\n"), std::string::npos)
       << s;
@@ -84,13 +88,14 @@ TEST(ScadExport, CuttersAreWrittenGrownByTheOvercut) {
   const double d = 1e-6 * t.bounds().diagonal();
   const std::string r = scadText(t);
   EXPECT_NE(r.find("module outer() cylinder(h = " + formatNumber(4 + 2 * d) +
-                   ", r = " + formatNumber(2 + d) + ", center = true);"),
+                   ", r = " + formatNumber(2 + d) + ", center = true, $fn = "),
             std::string::npos)
       << r;
   // The disc adds inside the ring and removes from the lid: two modules.
-  EXPECT_NE(r.find("module disc() cylinder(h = 4, r = 1, center = true);"), std::string::npos) << r;
+  EXPECT_NE(r.find("module disc() cylinder(h = 4, r = 1, center = true, $fn = "), std::string::npos)
+      << r;
   EXPECT_NE(r.find("module disc_cut() cylinder(h = " + formatNumber(4 + 2 * d) +
-                   ", r = " + formatNumber(1 + d) + ", center = true);"),
+                   ", r = " + formatNumber(1 + d) + ", center = true, $fn = "),
             std::string::npos)
       << r;
   EXPECT_NE(r.find("difference() {\n      outer();\n      disc();\n    }"), std::string::npos) << r;
@@ -101,12 +106,14 @@ TEST(ScadExport, CuttersAreWrittenGrownByTheOvercut) {
                           CsgTree::complement(CsgTree::leaf(Sphere{Vec3::Zero(), 1}, "ball"))});
   const double e = 1e-6 * c.bounds().diagonal();
   const std::string cs = scadText(c);
-  EXPECT_NE(cs.find("module ball() sphere(r = " + formatNumber(1 + e) + ");"), std::string::npos)
+  EXPECT_NE(cs.find("module ball() sphere(r = " + formatNumber(1 + e) + ", $fn = "),
+            std::string::npos)
       << cs;
   EXPECT_NE(cs.find("module slab() cube([6, 6, 2], center = true);"), std::string::npos) << cs;
   // With no overcut, nothing is grown and no second module is needed.
   const std::string z = scadText(t, noOvercut());
-  EXPECT_NE(z.find("module outer() cylinder(h = 4, r = 2, center = true);"), std::string::npos)
+  EXPECT_NE(z.find("module outer() cylinder(h = 4, r = 2, center = true, $fn = "),
+            std::string::npos)
       << z;
   EXPECT_EQ(z.find("disc_cut();"), std::string::npos) << z;
 }
@@ -148,6 +155,103 @@ TEST(ScadExport, ModuleNamesNeverTakeOpenScadNames) {
   EXPECT_NE(s.find("module module_1() "), std::string::npos) << s;
   EXPECT_NE(s.find("module difference_1() "), std::string::npos) << s;
   EXPECT_EQ(s.find("module cube() "), std::string::npos) << s;
+}
+
+// A turned part: a shaft of nine sections on one axis, eleven tori
+// rounding its shoulders and cutting its grooves, and nine holes, bosses
+// and cones: 29 primitives.
+CsgTree turnedPart() {
+  std::vector<CsgTree> sections, cuts;
+  double z = 0.0;
+  const double radii[] = {30, 26, 22, 18, 22, 26, 20, 15, 12};
+  for (int i = 0; i < 9; ++i) {
+    sections.push_back(CsgTree::leaf(Cylinder{Vec3(0, 0, z + 7.5), Vec3::UnitZ(), radii[i], 15}));
+    z += 15.0;
+  }
+  for (int i = 0; i < 11; ++i) {
+    const double r = radii[i % 9];
+    cuts.push_back(
+        CsgTree::leaf(Torus{Vec3(0, 0, 5.0 + 12.0 * i), Vec3::UnitZ(), r, 1.5 + 0.2 * i}));
+  }
+  for (int i = 0; i < 5; ++i) {
+    cuts.push_back(CsgTree::leaf(Cylinder{Vec3(12 * std::cos(1.2 * i), 12 * std::sin(1.2 * i), 7.5),
+                                          Vec3::UnitZ(), 2.5, 16}));
+  }
+  cuts.push_back(CsgTree::leaf(Cone{Vec3(0, 0, 130), Vec3::UnitZ(), 3, 8, 10}));
+  cuts.push_back(CsgTree::leaf(Sphere{Vec3(0, 0, 0), 6}));
+  cuts.push_back(CsgTree::leaf(Box{Vec3(0, 28, 40), Mat3::Identity(), Vec3(3, 4, 5)}));
+  cuts.push_back(CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 132}));
+  std::vector<CsgTree> operands = {CsgTree::unite(sections)};
+  operands.insert(operands.end(), cuts.begin(), cuts.end() - 1);
+  return CsgTree::intersect({CsgTree::subtract(operands), cuts.back()});
+}
+
+// The segment counts a tree.scad gives its curved primitives, and the
+// facets they make: a cylinder's or cone's side n, a sphere's n²/2, a
+// torus's sweep times its tube.
+struct Segments {
+  int largest = 0;
+  long facets = 0;
+  int curved = 0;
+};
+
+Segments segmentsOf(const std::string& scad) {
+  Segments out;
+  std::istringstream in(scad);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("module ", 0) != 0) continue;
+    std::vector<int> counts;
+    for (std::size_t at = line.find("segments("); at != std::string::npos;
+         at = line.find("segments(", at + 1)) {
+      counts.push_back(std::stoi(line.substr(at + 9)));
+    }
+    if (counts.empty()) continue;
+    ++out.curved;
+    for (int n : counts) out.largest = std::max(out.largest, n);
+    if (line.find("rotate_extrude") != std::string::npos) {
+      out.facets += long(counts.at(0)) * counts.at(1);
+    } else if (line.find("sphere(") != std::string::npos) {
+      out.facets += long(counts.at(0)) * counts.at(0) / 2;
+    } else {
+      out.facets += counts.at(0);
+    }
+  }
+  return out;
+}
+
+// Each curve's segments follow its size (a hole gets fewer than the shaft
+// it is cut in), tori are coarse, and the whole stays within a budget that
+// OpenSCAD 2021 renders in seconds: with $fn = 64 on every curve, the
+// eleven tori alone made 45 000 facets and the render took minutes.
+TEST(ScadExport, SegmentCountsFollowEachPrimitivesSize) {
+  const CsgTree part = turnedPart();
+  ASSERT_EQ(part.primitiveCount(), 29u);
+  const std::string s = scadText(part);
+  EXPECT_NE(s.find("\ndetail = 1;\nfunction segments(n) = max(3, round(n * detail));\n"),
+            std::string::npos)
+      << s;
+  const Segments seg = segmentsOf(s);
+  EXPECT_EQ(seg.curved, 27);  // all but the box and the half-space
+  EXPECT_LE(seg.largest, ScadOptions{}.maxSegments);
+  EXPECT_GE(seg.largest, 64);  // the shaft's largest section stays round
+  EXPECT_LE(seg.facets, 10000);
+  RecordProperty("facets", std::to_string(seg.facets));
+  std::printf("[ segments ] largest %d, %ld facets\n", seg.largest, seg.facets);
+  // A hole of radius 2.5 (16 long, and grown: it cuts) gets fewer segments than
+  // the section of radius 30.
+  const auto countOf = [&](const std::string& what) {
+    const std::size_t at = s.find(what);
+    EXPECT_NE(at, std::string::npos) << what;
+    return std::stoi(s.substr(s.find("segments(", at) + 9));
+  };
+  EXPECT_LT(countOf("cylinder(h = 16"), countOf("cylinder(h = 15, r = 30"));
+  // A fixed count, when asked for, is every curve's.
+  ScadOptions fixed;
+  fixed.facets = 20;
+  const Segments f = segmentsOf(scadText(part, fixed));
+  EXPECT_EQ(f.largest, 20);
+  EXPECT_EQ(f.facets, 20L * 15 + 11L * 20 * 20 + 20 * 20 / 2);
 }
 
 // ---- OpenSCAD round trip ----------------------------------------------------
