@@ -46,7 +46,9 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
   app.add_option("--res", opt->resolution,
                  "Mesh resolution: grid cells along the longest side of the part")
       ->check(inRange(8, 2048));
-  app.add_option("--fn", opt->facets, "OpenSCAD $fn for curved primitives")
+  app.add_option(
+         "--fn", opt->facets,
+         "OpenSCAD $fn for every curved primitive (default: chosen per primitive from its size)")
       ->check(inRange(3, 1000));
   app.add_option("--scan", opt->scan,
                  ".png: also draw this scan's points coloured by their distance to the tree");
