@@ -507,8 +507,8 @@ TEST_F(ScanReaderTest, ReplacesNormalsThatDisagreeWithTheSurface) {
 
 TEST_F(ScanReaderTest, KeepsTheNormalsOfEveryBundledScan) {
   // Sampled normals, clean and noisy, thin walls included: the given
-  // normals agree with the surface on at least 83 % of the points (noisy
-  // pin_base the least; random normals 13 %), and are kept as given.
+  // normals agree with the surface on at least 72 % of the points (noisy
+  // stepped_shaft the least; random normals 13-18 %), and are kept as given.
   std::vector<fs::path> scans;
   for (const auto& part : test::partNames()) {
     scans.push_back(test::dataDir() / part / "scan.ply");
@@ -523,7 +523,7 @@ TEST_F(ScanReaderTest, KeepsTheNormalsOfEveryBundledScan) {
     const Scan scan = readScan(path);
     EXPECT_FALSE(scan.info.normalsReplaced);
     EXPECT_FALSE(scan.info.normalsEstimated);
-    EXPECT_GT(scan.info.normalAgreement, 0.8);
+    EXPECT_GT(scan.info.normalAgreement, 0.7);
   }
 }
 
