@@ -9,8 +9,24 @@
 
 namespace csgvox {
 
+void checkReadOptions(const ReadOptions& options) {
+  if (options.normalNeighbors < 6) {
+    throw std::invalid_argument("ReadOptions::normalNeighbors must be at least 6");
+  }
+  if (!(options.minNormalAgreement >= 0.0 && options.minNormalAgreement <= 1.0)) {
+    throw std::invalid_argument("ReadOptions::minNormalAgreement must be in 0..1");
+  }
+}
+
 void completeNormals(Scan& scan, const std::string& source, const ReadOptions& options) {
-  if (scan.info.fromMesh || scan.cloud.hasNormals()) return;
+  if (scan.info.fromMesh) return;
+  if (scan.cloud.hasNormals()) {
+    // Normals that mostly disagree with the surface (random ones) would
+    // leave detection nothing to find, slowly: they are estimated instead.
+    scan.info.normalAgreement = normalAgreement(scan.cloud, options.normalNeighbors);
+    if (scan.info.normalAgreement >= options.minNormalAgreement) return;
+    scan.info.normalsReplaced = true;
+  }
   const std::size_t n = scan.cloud.size();
   if (n <= static_cast<std::size_t>(options.normalNeighbors)) {
     throw ParseError(source + ": has only " + std::to_string(n) +
@@ -51,9 +67,7 @@ Scan scanFromArrays(std::vector<Vec3> points, std::vector<Vec3> normals, const s
     throw ParseError(source + ": has " + std::to_string(points.size()) + " points; at least " +
                      std::to_string(minimum) + " are needed");
   }
-  if (options.normalNeighbors < 6) {
-    throw std::invalid_argument("ReadOptions::normalNeighbors must be at least 6");
-  }
+  checkReadOptions(options);
   Scan scan;
   scan.cloud.points = std::move(points);
   scan.cloud.normals = std::move(normals);

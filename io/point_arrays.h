@@ -11,9 +11,16 @@
 
 namespace csgvox {
 
-/// Estimates the normals of a point cloud read without them (nothing to do
-/// for a scan with normals or sampled from a mesh), as readScan() does, and
-/// sets info.normalsEstimated.
+/// Checks the options that readScan() and scanFromArrays() take.
+/// @throw std::invalid_argument when normalNeighbors < 6 or
+///        minNormalAgreement is outside 0..1.
+void checkReadOptions(const ReadOptions& options);
+
+/// Estimates the normals of a point cloud read without them, or with normals
+/// of which fewer than options.minNormalAgreement agree with the local
+/// surface (nothing to do for a scan sampled from a mesh), as readScan()
+/// does, and sets info.normalsEstimated, normalsReplaced and
+/// normalAgreement.
 /// @throw ParseError "<source>: ..." when the points are too few for
 ///        options.normalNeighbors neighbours or span no surface.
 void completeNormals(Scan& scan, const std::string& source, const ReadOptions& options = {});

@@ -17,11 +17,19 @@ nlohmann::ordered_json toJson(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 std::string describeScan(const Scan& scan) {
   const Aabb b = scan.cloud.bounds();
   const Vec3 s = b.size();
+  char normals[128] = "normals given";
+  if (scan.info.normalsReplaced) {
+    std::snprintf(normals, sizeof(normals),
+                  "normals re-estimated (%.0f %% of the given ones agreed with the surface)",
+                  100.0 * scan.info.normalAgreement);
+  } else if (scan.info.normalsEstimated) {
+    std::snprintf(normals, sizeof(normals), "normals estimated");
+  }
   char buf[512];
   std::snprintf(buf, sizeof(buf), "%zu points (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s",
                 scan.cloud.size(), scan.info.format.c_str(),
                 scan.info.fromMesh ? ", sampled from a mesh" : "", s.x(), s.y(), s.z(),
-                b.diagonal(), scan.info.normalsEstimated ? "normals estimated" : "normals given");
+                b.diagonal(), normals);
   return buf;
 }
 
@@ -33,7 +41,10 @@ nlohmann::ordered_json scanJson(const std::filesystem::path& path, const Scan& s
   j["points"] = scan.cloud.size();
   j["from_mesh"] = scan.info.fromMesh;
   if (scan.info.fromMesh) j["mesh_faces"] = scan.info.meshFaces;
-  j["normals"] = scan.info.normalsEstimated ? "estimated" : "given";
+  j["normals"] = scan.info.normalsReplaced    ? "re-estimated"
+                 : scan.info.normalsEstimated ? "estimated"
+                                              : "given";
+  if (scan.info.normalAgreement >= 0.0) j["normal_agreement"] = scan.info.normalAgreement;
   j["bounds_min"] = toJson(b.min);
   j["bounds_max"] = toJson(b.max);
   j["diagonal"] = b.diagonal();

@@ -13,9 +13,7 @@ namespace csgvox {
 
 Scan readScan(std::istream& in, ScanFileType type, const std::string& source,
               const ReadOptions& options) {
-  if (options.normalNeighbors < 6) {
-    throw std::invalid_argument("ReadOptions::normalNeighbors must be at least 6");
-  }
+  checkReadOptions(options);
   Scan scan = readScanContent(in, type, source, options);
   completeNormals(scan, source, options);
   return scan;

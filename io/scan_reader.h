@@ -18,6 +18,11 @@ struct ReadOptions {
   std::size_t meshSamples = 100000;  ///< points sampled from a mesh input, area-weighted (count)
   std::uint64_t seed = 1;            ///< seed of the mesh sampling; same seed, same points
   int normalNeighbors = 18;  ///< k nearest neighbours for estimating missing normals (count, >= 6)
+  /// Given normals are replaced by estimated ones when fewer than this
+  /// fraction of the points agree with their local surface (normalAgreement
+  /// over normalNeighbors neighbours); the bundled scans read 0.72 to 1,
+  /// random normals 0.1 to 0.18. 0 keeps given normals always (fraction, 0..1).
+  double minNormalAgreement = 0.5;
   std::size_t minPoints = 100;  ///< a scan with fewer points is rejected (count)
 };
 
@@ -29,8 +34,14 @@ struct ScanInfo {
   std::string format;
   bool fromMesh = false;          ///< the points were sampled from the faces of a mesh
   std::size_t meshFaces = 0;      ///< faces in the mesh file as written (0 for a point cloud)
-  bool normalsEstimated = false;  ///< the file had no normals; they were estimated
-  std::size_t pointsRead = 0;     ///< points (for a mesh: vertices) read from the file
+  bool normalsEstimated = false;  ///< the normals were estimated (the file had none, or
+                                  ///< normalsReplaced)
+  bool normalsReplaced = false;   ///< the file's normals disagreed with the surface and were
+                                  ///< replaced by estimated ones
+  /// Fraction of the file's normals that agree with the local surface
+  /// (normalAgreement); -1 when the file had no normals or is a mesh.
+  double normalAgreement = -1.0;
+  std::size_t pointsRead = 0;  ///< points (for a mesh: vertices) read from the file
 };
 
 /// A scan read from a file.
@@ -52,8 +63,10 @@ enum class ScanFileType {
 /// (case-insensitive): .ply, .xyz, .xyzn, .pts, .txt, .off, .obj, .stl.
 ///
 /// A point cloud keeps its points; given normals are normalised, missing
-/// normals are estimated (estimateNormals with options.normalNeighbors). A
-/// mesh yields options.meshSamples points drawn uniformly by area, each with
+/// normals are estimated (estimateNormals with options.normalNeighbors), and
+/// so are given normals of which fewer than options.minNormalAgreement agree
+/// with the local surface (normals in random directions, or of another scan).
+/// A mesh yields options.meshSamples points drawn uniformly by area, each with
 /// the normal of its face, oriented outwards (consistently oriented soup,
 /// positive enclosed volume).
 /// @throw IoError "<path>: ..." when the file is missing, a directory or
@@ -66,7 +79,8 @@ enum class ScanFileType {
 ///        normals, fewer than options.minPoints points, a mesh without faces
 ///        or with zero area.
 /// @throw std::invalid_argument when options are invalid (normalNeighbors
-///        < 6, meshSamples < minPoints for a mesh).
+///        < 6, minNormalAgreement outside 0..1, meshSamples < minPoints for
+///        a mesh).
 Scan readScan(const std::filesystem::path& path, const ReadOptions& options = {});
 
 /// Reads a scan of the given type from a stream opened in binary mode. The

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,7 @@
 
 #include "core/nearest_neighbors.h"
 #include "core/principal_axes.h"
+#include "core/statistics.h"
 #include "primitives/cgal_kernel.h"
 
 namespace csgvox {
@@ -33,6 +35,22 @@ constexpr std::size_t kMatchingPairs = 16;
 // of neighbourhoods to their planes (noise).
 constexpr double kOnPlaneRadiusFraction = 0.1;
 constexpr double kOnPlaneNoiseFactor = 3.0;
+// A normal agrees with its local surface within this angle (normalAgreement).
+constexpr double kAgreementDegrees = 30.0;
+// Points on which normalAgreement measures the agreement, at most.
+constexpr std::size_t kAgreementSamples = 4000;
+// normalAgreement fits its plane to the points among kAgreementWidening x k
+// nearest whose normals are within acos(kSameSideCosine) of the point's.
+constexpr std::size_t kAgreementWidening = 3;
+constexpr double kSameSideCosine = 0.3;
+// A neighbourhood is flat when its least principal spread is at most this
+// fraction of its middle one (median over the sampled points); otherwise
+// normalAgreement doubles it, up to kAgreementMaxBall points, measuring it
+// on kAgreementBudget / k points (at least kAgreementMinSamples).
+constexpr double kFlatNeighbourhood = 0.25;
+constexpr std::size_t kAgreementMaxBall = 6144;
+constexpr std::size_t kAgreementBudget = 4000 * 19;
+constexpr std::size_t kAgreementMinSamples = 250;
 // Degree of the jet (a quadric, as CGAL's jet_estimate_normals by default).
 constexpr std::size_t kJetDegree = 2;
 // A neighbourhood spans a surface when its second principal variance exceeds
@@ -405,6 +423,64 @@ void estimateNormals(PointCloud& cloud, int neighbors) {
   for (std::size_t i = 0; i < n; ++i) {
     const Vector3& normal = normals[distinct.of[i]];
     cloud.normals[i] = Vec3(normal.x(), normal.y(), normal.z()).normalized();
+  }
+}
+
+double normalAgreement(const PointCloud& cloud, int neighbors) {
+  if (neighbors < 3) {
+    throw std::invalid_argument("normalAgreement: neighbors must be at least 3 (is " +
+                                std::to_string(neighbors) + ")");
+  }
+  if (!cloud.hasNormals()) throw std::invalid_argument("normalAgreement: the cloud has no normals");
+  const std::size_t n = cloud.size();
+  if (n <= static_cast<std::size_t>(neighbors)) return 1.0;
+  const NearestNeighbors tree(cloud.points);
+  const double cosTolerance = std::cos(kAgreementDegrees * std::numbers::pi / 180.0);
+  // Where the points are dense against their noise, the nearest few form a
+  // ball, not a patch of surface, and its plane turns at random: the
+  // neighbourhood widens until its planes are flat (least spread under a
+  // quarter of the middle one), on fewer points as it widens.
+  std::size_t k = static_cast<std::size_t>(neighbors) + 1;
+  while (true) {
+    const std::size_t count =
+        std::clamp<std::size_t>(kAgreementBudget / k, kAgreementMinSamples, kAgreementSamples);
+    const std::size_t stride = std::max<std::size_t>(1, n / count);
+    const std::size_t samples = (n + stride - 1) / stride;
+    // Per sampled point: 1 agrees, 0 disagrees, -1 spans no surface; and
+    // the flatness of its neighbourhood.
+    std::vector<int> agrees(samples, -1);
+    std::vector<double> flatness(samples, -1.0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples, 16), [&](const auto& range) {
+      std::vector<std::uint32_t> wide, hood;
+      for (std::size_t s = range.begin(); s != range.end(); ++s) {
+        const std::size_t i = s * stride;
+        // The nearest points whose normals face the same way (within about
+        // 70 degrees): the other face of a wall thinner than the
+        // neighbourhood, and much of the face across a sharp edge, stay out
+        // of the plane. Normals in random directions keep a random third of
+        // the points, which still lie on the local surface.
+        tree.kNearest(cloud.points[i], kAgreementWidening * k, wide);
+        hood.clear();
+        for (std::uint32_t j : wide) {
+          if (hood.size() < k && cloud.normals[j].dot(cloud.normals[i]) > kSameSideCosine) {
+            hood.push_back(j);
+          }
+        }
+        if (hood.size() < 3 || !spansSurface(cloud.points, hood)) continue;
+        const PrincipalAxes axes = principalAxes(cloud.points, hood);
+        agrees[s] = std::abs(axes.leastAxis().dot(cloud.normals[i])) >=
+                    cosTolerance * cloud.normals[i].norm();
+        flatness[s] = std::sqrt(std::max(0.0, axes.variances[2]) / axes.variances[1]);
+      }
+    });
+    std::erase_if(flatness, [](double f) { return f < 0.0; });
+    const auto counted = std::count_if(agrees.begin(), agrees.end(), [](int a) { return a >= 0; });
+    if (counted == 0) return 1.0;
+    if (kAgreementWidening * k >= std::min(n, kAgreementMaxBall) ||
+        median(std::move(flatness)) <= kFlatNeighbourhood) {
+      return double(std::count(agrees.begin(), agrees.end(), 1)) / double(counted);
+    }
+    k *= 2;
   }
 }
 

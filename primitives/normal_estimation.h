@@ -28,4 +28,17 @@ namespace csgvox {
 ///        neighbourhood spans a surface (all points on a line).
 void estimateNormals(PointCloud& cloud, int neighbors);
 
+/// How far a cloud's own normals agree with its local surface: the fraction
+/// of the points whose normal lies within 30 degrees, sign ignored, of the
+/// normal of the plane through its `neighbors` nearest neighbours among
+/// those whose normals face its way (within about 70 degrees; the other face
+/// of a thin wall stays out), over a deterministic subset of at most 4000
+/// points. Where those neighbourhoods are not flat (points dense against
+/// their noise), they widen until they are. Neighbourhoods that span no
+/// surface are not counted. The bundled scans' sampled normals read 0.72 to
+/// 1, normals in random directions 0.1 to 0.18. 1 for a cloud of no more
+/// than `neighbors` points.
+/// @throw std::invalid_argument if `neighbors` < 3 or the cloud has no normals.
+double normalAgreement(const PointCloud& cloud, int neighbors);
+
 }  // namespace csgvox

@@ -1,12 +1,14 @@
 // Tests for primitives/normal_estimation.h on degenerate input: copies of a
 // point, a scan at one position, points on a line; and determinism across
-// thread counts. (Accuracy on spheres, boxes, tubes and the bundled scans is
-// tested with the scan reader.)
+// thread counts; how far given normals agree with the surface. (Accuracy on
+// spheres, boxes, tubes and the bundled scans, and the agreement of the
+// bundled scans' normals, are tested with the scan reader.)
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <filesystem>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -101,6 +103,27 @@ TEST(EstimateNormals, SameNormalsWithAnyThreadCount) {
     estimateNormals(serial, 18);
   }
   EXPECT_EQ(parallel.normals, serial.normals);
+}
+
+TEST(NormalAgreement, TellsTheSurfacesNormalsFromRandomOnes) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> gauss;
+  const auto randomUnit = [&]() { return Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized(); };
+  EXPECT_GT(normalAgreement(flange(), 18), 0.99);
+  // Turned by up to 17 degrees, as a scanner's normals may be: most still
+  // agree; in random directions, about one in eight (1 - cos 30 deg).
+  PointCloud tilted = flange();
+  for (Vec3& n : tilted.normals) n = (n + 0.3 * randomUnit()).normalized();
+  EXPECT_GT(normalAgreement(tilted, 18), 0.9);
+  PointCloud random = flange();
+  for (Vec3& n : random.normals) n = randomUnit();
+  EXPECT_NEAR(normalAgreement(random, 18), 0.134, 0.03);
+  // Flipped normals agree as well (the sign is not judged).
+  PointCloud flipped = flange();
+  for (Vec3& n : flipped.normals) n = -n;
+  EXPECT_EQ(normalAgreement(flipped, 18), normalAgreement(flange(), 18));
+  EXPECT_THROW(normalAgreement(PointCloud{flange().points, {}}, 18), std::invalid_argument);
+  EXPECT_THROW(normalAgreement(flange(), 2), std::invalid_argument);
 }
 
 }  // namespace
