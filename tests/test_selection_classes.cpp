@@ -429,7 +429,7 @@ SubtreeResult refSelectSubtree(const VoxelSet& root, const VoxelSet& inside,
     double invL_, alpha_;
   };
   const Selection best = refSolve(pb, Objective(insideCount, outsideCount, invL, options.alpha),
-                                  {3, streamSeed(options.seed, 12345), options.nodeBudget});
+                                  {3, streamSeed(options.seed, 12345), options.nodeBudget, {}});
   result.provedOptimal = best.provedOptimal;
   result.energy = best.energy;
   result.voxels = root;
@@ -519,7 +519,7 @@ TEST(SelectionClasses, PhaseTwoOnARealPartMatchesThePreviousSolver) {
       double invM_, invTotal_;
     };
     const Selection ref = refSolve(pb, Objective(8.0 / double(total), 1.0 / double(total)),
-                                   {8, streamSeed(1, 54321), budget});
+                                   {8, streamSeed(1, 54321), budget, {}});
     std::vector<std::uint32_t> chosen;
     for (std::size_t i = 0; i < ref.chosen.size(); ++i) {
       if (ref.chosen[i]) chosen.push_back(pb.items()[i].id);
