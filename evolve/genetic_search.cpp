@@ -139,6 +139,10 @@ EvolveResult evolve(const FitnessModel& model, std::span<const CsgTree> seeds,
                           0.0});
   }
 
+  if (options.control.cancelled()) {
+    result.stop = EvolveStop::Cancelled;
+    return result;
+  }
   bool roughPhase = rough != nullptr;
   Evaluator evaluator(roughPhase ? rough : &model);
   evaluator.evaluate(population, result.evaluations);

@@ -97,11 +97,15 @@ PartitionedResult evolvePartitioned(std::span<const Vec3> points, std::span<cons
                                            options.roughPoints, eo.seed, nullptr);
     const Clock::time_point t = Clock::now();
     EvolveResult r = evolve(models.full, {}, eo, {}, models.rough ? &*models.rough : nullptr);
-    trees[k] = library.adopt(r.best);
+    if (!r.best.empty()) trees[k] = library.adopt(r.best);
     out.partitions[k] = {part.primitives, part.points.size(), r.generations, r.best.nodeCount(),
                          secondsSince(t)};
   });
   out.searchSeconds = secondsSince(searchStart);
+  if (control.cancelled()) {  // no merge: the result is not used
+    out.search.stop = EvolveStop::Cancelled;
+    return out;
+  }
 
   const Clock::time_point mergeStart = Clock::now();
   CsgTree merged;

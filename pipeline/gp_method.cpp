@@ -9,7 +9,15 @@ GpResult runGp(const PointCloud& scan, std::span<const Surface> surfaces, const 
                const GenerationCallback& onGeneration, const VoxelTarget* target) {
   if (!scan.hasNormals()) throw std::invalid_argument("the gp method needs a scan with normals");
   GpResult out;
+  // Checked before and after the library (0.7 s on 10 000 points, not
+  // interruptible itself).
+  const auto cancelled = [&] {
+    if (options.evolve.control.cancelled()) out.search.stop = EvolveStop::Cancelled;
+    return out.search.stop == EvolveStop::Cancelled;
+  };
+  if (cancelled()) return out;
   out.primitives = gpPrimitives(scan, surfaces, options.primitives);
+  if (cancelled()) return out;
   const double diagonal = scan.diagonal();
   if (options.partition) {
     PartitionOptions po = options.partitioning;
