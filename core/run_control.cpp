@@ -7,17 +7,12 @@ namespace csgvox {
 RunControl::RunControl() : state_(std::make_shared<State>()) {}
 
 RunControl::RunControl(double timeLimit, ProgressCallback progress)
-    : state_(std::make_shared<State>()), timeLimit_(timeLimit) {
+    : state_(std::make_shared<State>()) {
   state_->progress = std::move(progress);
   if (timeLimit > 0.0) {
     deadline_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                    std::chrono::duration<double>(timeLimit));
   }
-}
-
-double RunControl::secondsLeft() const {
-  if (deadline_ == Clock::time_point::max()) return 0.0;
-  return std::max(std::chrono::duration<double>(deadline_ - Clock::now()).count(), 1e-3);
 }
 
 bool RunControl::report(double fraction, std::string_view stage) const {
@@ -27,11 +22,7 @@ bool RunControl::report(double fraction, std::string_view stage) const {
 
 RunControl RunControl::until(Clock::time_point deadline) const {
   RunControl copy = *this;
-  if (deadline < copy.deadline_) {
-    copy.deadline_ = deadline;
-    copy.timeLimit_ =
-        std::max(std::chrono::duration<double>(deadline - Clock::now()).count(), 1e-3);
-  }
+  copy.deadline_ = std::min(copy.deadline_, deadline);
   return copy;
 }
 

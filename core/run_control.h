@@ -25,12 +25,8 @@ class RunControl {
   /// returning false is a cancel request.
   explicit RunControl(double timeLimit, ProgressCallback progress = {});
 
-  /// The seconds asked for (0: none).
-  double timeLimit() const { return timeLimit_; }
   /// When the work must stop (time_point::max() without a limit).
   Clock::time_point deadline() const { return deadline_; }
-  /// Seconds to the deadline (at least 1e-3 once a limit is set; 0 without one).
-  double secondsLeft() const;
   /// The deadline has passed.
   bool pastDeadline() const { return Clock::now() > deadline_; }
   /// Asks every step under this control (and its copies) to stop; any thread.
@@ -54,7 +50,6 @@ class RunControl {
     ProgressCallback progress;
   };
   std::shared_ptr<State> state_;
-  double timeLimit_ = 0.0;
   Clock::time_point deadline_ = Clock::time_point::max();
 };
 

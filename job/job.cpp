@@ -120,6 +120,21 @@ void measureInto(ReportContext& ctx, const CsgTree& tree, double voxelIou,
   }
 }
 
+// Every file of the job, the tree measured, then report.json as `build`
+// shapes it from the context; returns the report.
+template <class BuildReport>
+nlohmann::ordered_json writeFilesAndReport(OutputSet& output, ReportContext ctx,
+                                           const CsgTree& tree, double voxelIou,
+                                           const JobOptions& options, const Console& console,
+                                           const BuildReport& build) {
+  writeTreeFiles(output, *ctx.scan, tree, options, ctx, console);
+  measureInto(ctx, tree, voxelIou, options, console);
+  ctx.outputs = writtenFiles(output);
+  const nlohmann::ordered_json report = build(ctx);
+  writeJsonFile(output.path("report.json"), report);
+  return report;
+}
+
 }  // namespace
 
 TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
@@ -146,26 +161,22 @@ nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& 
                                 const Scan& scan, const Reconstruction& rec,
                                 const JobOptions& options, nlohmann::ordered_json timings,
                                 const Console& console) {
-  ReportContext ctx = contextOf(scanPath, scan, options, std::move(timings));
-  writeTreeFiles(output, scan, rec.tree, options, ctx, console);
-  measureInto(ctx, rec.tree, rec.voxelIou(), options, console);
-  ctx.outputs = writtenFiles(output);
-  const nlohmann::ordered_json report = reconstructionReport(rec, options.reconstruct, ctx);
-  writeJsonFile(output.path("report.json"), report);
-  return report;
+  return writeFilesAndReport(output, contextOf(scanPath, scan, options, std::move(timings)),
+                             rec.tree, rec.voxelIou(), options, console,
+                             [&](const ReportContext& ctx) {
+                               return reconstructionReport(rec, options.reconstruct, ctx);
+                             });
 }
 
 nlohmann::ordered_json writeImportedJob(OutputSet& output, const std::filesystem::path& scanPath,
                                         const Scan& scan, const ImportedTree& imported,
                                         double voxelIou, const JobOptions& options,
                                         const Console& console) {
-  ReportContext ctx = contextOf(scanPath, scan, options, nlohmann::ordered_json::object());
-  writeTreeFiles(output, scan, *imported.tree, options, ctx, console);
-  measureInto(ctx, *imported.tree, voxelIou, options, console);
-  ctx.outputs = writtenFiles(output);
-  const nlohmann::ordered_json report = importedTreeReport(imported, options.reconstruct, ctx);
-  writeJsonFile(output.path("report.json"), report);
-  return report;
+  return writeFilesAndReport(
+      output, contextOf(scanPath, scan, options, nlohmann::ordered_json::object()), *imported.tree,
+      voxelIou, options, console, [&](const ReportContext& ctx) {
+        return importedTreeReport(imported, options.reconstruct, ctx);
+      });
 }
 
 nlohmann::ordered_json reportWithoutFiles(const std::filesystem::path& scanPath, const Scan& scan,
