@@ -156,7 +156,8 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
       labels = rec.labels;
       OutputSet output(folder / name, jobFiles(), inputs);
       const nlohmann::ordered_json report =
-          writeJob(output, scanPath, scan, rec, settings, {{"detect", detectSeconds}}, console);
+          writeJob(output, scanPath, scan, rec, settings, {{"detect", detectSeconds}}, console,
+                   RunControl(0.0, console.progress()));
       output.commit();
       rows.push_back(row(name, wallSeconds, cpu, report));
     }
@@ -176,7 +177,8 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
       imported.surfaces = found.detection.surfaces.size();
       OutputSet output(folder / "import-gp", jobFiles(), inputs);
       const nlohmann::ordered_json report =
-          writeImportedJob(output, scanPath, scan, imported, voxelIou, opt->job, console);
+          writeImportedJob(output, scanPath, scan, imported, voxelIou, opt->job, console,
+                           RunControl(0.0, console.progress()));
       output.commit();
       rows.push_back(row("import-gp", 0.0, 0.0, report));
     }

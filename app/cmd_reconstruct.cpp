@@ -55,12 +55,13 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                          : fs::path(opt->outDir),
                      jobFiles(), inputs);
 
+    const RunControl control(opt->job.timeLimit, console.progress());
     const Reconstruction rec = reconstruct(
         scan.cloud, opt->job.reconstruct,
         [&](std::string_view stage, bool done, const std::string& summary) {
           if (done) console.info(std::string(stage) + ": " + summary);
         },
-        RunControl(opt->job.timeLimit, console.progress()));
+        control);
     for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
     if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
     if (rec.timeLimitHit) {
@@ -73,7 +74,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                  std::to_string(tree.operationCount()) + " operations, depth " +
                  std::to_string(tree.depth()));
     const nlohmann::ordered_json report =
-        writeJob(output, scanPath, scan, rec, opt->job, timings, console);
+        writeJob(output, scanPath, scan, rec, opt->job, timings, console, control);
     output.commit();
     std::string written;
     for (const auto& name : report["outputs"])

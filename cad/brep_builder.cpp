@@ -17,6 +17,7 @@
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
+#include <Message_ProgressIndicator.hxx>
 #include <Poly_Triangulation.hxx>
 #include <ShapeUpgrade_UnifySameDomain.hxx>
 #include <Standard_Failure.hxx>
@@ -60,6 +61,10 @@ TopoDS_Shape cube(const Mat3& frame, const Vec3& center, const Vec3& size) {
 }
 
 TopoDS_Shape cube(const StandInCube& c) { return cube(c.frame, c.center, Vec3::Constant(c.edge)); }
+
+void throwIfCancelled(const RunControl& control) {
+  if (control.cancelled()) throw CancelledError("the STEP export was cancelled");
+}
 
 struct Builder {
   const StepOptions& options;
@@ -125,7 +130,8 @@ struct Builder {
     if (options.fuzzy > 0.0) op.SetFuzzyValue(options.fuzzy * extent.diagonal());
     op.SetRunParallel(false);
     op.SetToFillHistory(false);
-    op.Build();
+    op.Build(cancelIndicator(options.control)->Start());
+    throwIfCancelled(options.control);  // before the errors: a user break is one
     if (op.HasErrors() || !op.IsDone()) {
       std::ostringstream why;
       op.DumpErrors(why);
@@ -263,6 +269,24 @@ bool volumesAgree(double brep, double sampled, const Aabb& box, double tolerance
 }
 
 }  // namespace
+
+namespace {
+
+class CancelIndicator final : public Message_ProgressIndicator {
+ public:
+  explicit CancelIndicator(const RunControl& control) : control_(control) {}
+  Standard_Boolean UserBreak() override { return control_.cancelled(); }
+  void Show(const Message_ProgressScope&, const Standard_Boolean) override {}
+
+ private:
+  RunControl control_;  // a copy: it shares the cancel request
+};
+
+}  // namespace
+
+Handle(Message_ProgressIndicator) cancelIndicator(const RunControl& control) {
+  return new CancelIndicator(control);
+}
 
 BrepSummary summarize(const TopoDS_Shape& shape) {
   BrepSummary s;
@@ -504,6 +528,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   if (!done() && options.snapTolerance > 0.0) a.attemptSnapped(true);
   const Built* chosen = chooseSolid(a.tries, check);
   if (!chosen) failBuild(a, check);
+  throwIfCancelled(options.control);
 
   BrepResult result;
   if (options.unifyFaces) {
@@ -512,6 +537,7 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options) {
   } else {
     result.shape = chosen->solid.shape;
   }
+  throwIfCancelled(options.control);
   try {
     if (options.nameFaces) nameFaces(result, chosen->tree, extent.diagonal());
   } catch (const Standard_Failure& e) {

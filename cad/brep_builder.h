@@ -2,6 +2,7 @@
 // Internal to cad/: the tree as an OpenCASCADE shape. OpenCASCADE types
 // appear here and must not reach any header outside this folder.
 
+#include <Message_ProgressIndicator.hxx>
 #include <TopoDS_Shape.hxx>
 #include <string>
 #include <utility>
@@ -23,5 +24,9 @@ BrepResult buildBrep(const CsgTree& tree, const StepOptions& options);
 
 /// Measures a shape (see BrepSummary).
 BrepSummary summarize(const TopoDS_Shape& shape);
+
+// A progress indicator whose user break is `control`'s cancel request, for
+// OpenCASCADE's algorithms that take a Message_ProgressRange.
+Handle(Message_ProgressIndicator) cancelIndicator(const RunControl& control);
 
 }  // namespace csgvox::cad

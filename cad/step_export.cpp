@@ -88,7 +88,10 @@ BrepSummary writeStep(const fs::path& path, const CsgTree& tree, const StepOptio
   try {
     STEPCAFControl_Writer writer;
     writer.SetNameMode(true);
-    if (!writer.Transfer(doc, STEPControl_AsIs)) {
+    const bool transferred =
+        writer.Transfer(doc, STEPControl_AsIs, nullptr, cad::cancelIndicator(options.control)->Start());
+    if (options.control.cancelled()) throw CancelledError("the STEP export was cancelled");
+    if (!transferred) {
       throw CadError(path.string() + ": OpenCASCADE cannot translate the solid to STEP");
     }
     if (writer.Write(tmp.c_str()) != IFSelect_RetDone) {
@@ -97,6 +100,7 @@ BrepSummary writeStep(const fs::path& path, const CsgTree& tree, const StepOptio
   } catch (const Standard_Failure& e) {
     std::error_code ec;
     fs::remove(tmp, ec);
+    if (options.control.cancelled()) throw CancelledError("the STEP export was cancelled");
     throw CadError(path.string() + ": OpenCASCADE cannot write STEP: " + e.GetMessageString());
   } catch (...) {
     std::error_code ec;

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "core/csg_tree.h"
+#include "core/run_control.h"
 
 namespace csgvox {
 
@@ -33,6 +34,10 @@ struct StepOptions {
   double volumeTolerance = 0.01;   ///< refuse a solid whose volume differs more from the tree's
                                    ///< (sampled), fraction; 0: no check
   std::string productName = "csgvox part";  ///< name of the solid's product in the file
+  /// A cancel request stops the export (between and inside OpenCASCADE's
+  /// boolean operations and its STEP translation) with CancelledError; the
+  /// export has no deadline.
+  RunControl control;
 };
 
 /// The tree cannot be built as a valid solid: a boolean operation failed,

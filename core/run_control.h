@@ -8,11 +8,19 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <stdexcept>
 #include <string_view>
 
 #include "core/progress.h"
 
 namespace csgvox {
+
+/// Thrown by a step that cannot give a partial result (meshing, the STEP
+/// export) when its RunControl is cancelled.
+class CancelledError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 class RunControl {
  public:

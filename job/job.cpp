@@ -46,14 +46,17 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobOptions& op
 // warning in the report), not the job.
 void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
                      const TriangleMesh& mesh, const JobOptions& options,
-                     nlohmann::ordered_json& timings, nlohmann::ordered_json& warnings) {
+                     nlohmann::ordered_json& timings, nlohmann::ordered_json& warnings,
+                     const RunControl& control) {
   Stopwatch watch;
   if (!stepExportAvailable()) {
     output.skip("tree.step");
     warnings.push_back("tree.step: not written: this build has no OpenCASCADE");
   } else {
     try {
-      writeStep(output.path("tree.step"), tree);
+      StepOptions so;
+      so.control = control;
+      writeStep(output.path("tree.step"), tree, so);
     } catch (const CadError& e) {
       output.skip("tree.step");
       std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", e.what());
@@ -73,7 +76,7 @@ void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
 // Every file of the job but report.json; `ctx` gains the export, step and
 // preview timings and any warning.
 void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
-                    const JobOptions& options, ReportContext& ctx, const Console& console) {
+                    const JobOptions& options, ReportContext& ctx, const RunControl& control) {
   Stopwatch watch;
   writeTreeJson(output.path("tree.json"), tree);
   writeScad(output.path("tree.scad"), tree);
@@ -81,10 +84,10 @@ void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
   writeCsg(output.path("tree.csg"), tree);
   MeshOptions mo;
   mo.resolution = options.meshResolution;
-  const TriangleMesh mesh = meshTree(tree, mo, RunControl(0.0, console.progress()));
+  const TriangleMesh mesh = meshTree(tree, mo, control);
   writeMesh(output.path("mesh.ply"), mesh);
   ctx.timings["export"] = watch.seconds();
-  writeCadOutputs(output, scan, tree, mesh, options, ctx.timings, ctx.warnings);
+  writeCadOutputs(output, scan, tree, mesh, options, ctx.timings, ctx.warnings, control);
 }
 
 // The files written so far, in the order of jobFiles(), report.json included.
@@ -126,8 +129,8 @@ template <class BuildReport>
 nlohmann::ordered_json writeFilesAndReport(OutputSet& output, ReportContext ctx,
                                            const CsgTree& tree, double voxelIou,
                                            const JobOptions& options, const Console& console,
-                                           const BuildReport& build) {
-  writeTreeFiles(output, *ctx.scan, tree, options, ctx, console);
+                                           const RunControl& control, const BuildReport& build) {
+  writeTreeFiles(output, *ctx.scan, tree, options, ctx, control);
   measureInto(ctx, tree, voxelIou, options, console);
   ctx.outputs = writtenFiles(output);
   const nlohmann::ordered_json report = build(ctx);
@@ -160,9 +163,9 @@ TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
 nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& scanPath,
                                 const Scan& scan, const Reconstruction& rec,
                                 const JobOptions& options, nlohmann::ordered_json timings,
-                                const Console& console) {
+                                const Console& console, const RunControl& control) {
   return writeFilesAndReport(output, contextOf(scanPath, scan, options, std::move(timings)),
-                             rec.tree, rec.voxelIou(), options, console,
+                             rec.tree, rec.voxelIou(), options, console, control,
                              [&](const ReportContext& ctx) {
                                return reconstructionReport(rec, options.reconstruct, ctx);
                              });
@@ -171,10 +174,10 @@ nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& 
 nlohmann::ordered_json writeImportedJob(OutputSet& output, const std::filesystem::path& scanPath,
                                         const Scan& scan, const ImportedTree& imported,
                                         double voxelIou, const JobOptions& options,
-                                        const Console& console) {
+                                        const Console& console, const RunControl& control) {
   return writeFilesAndReport(
       output, contextOf(scanPath, scan, options, nlohmann::ordered_json::object()), *imported.tree,
-      voxelIou, options, console, [&](const ReportContext& ctx) {
+      voxelIou, options, console, control, [&](const ReportContext& ctx) {
         return importedTreeReport(imported, options.reconstruct, ctx);
       });
 }

@@ -47,18 +47,20 @@ TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
 /// skipped with options.preview off; tree.step is skipped, with one error
 /// line on stderr naming the node and a warning in the report, when
 /// OpenCASCADE cannot build the solid (or the build has no OpenCASCADE):
-/// the other files are still written.
+/// the other files are still written. A cancel request to `control` stops
+/// the meshing and the STEP export with CancelledError (its deadline does
+/// not apply: the files of a finished tree are always written whole).
 nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& scanPath,
                                 const Scan& scan, const Reconstruction& rec,
                                 const JobOptions& options, nlohmann::ordered_json timings,
-                                const Console& console);
+                                const Console& console, const RunControl& control = {});
 
 /// As writeJob, for a tree read from a file (`compare --import-gp`) and
 /// measured on a detection's grid and labels.
 nlohmann::ordered_json writeImportedJob(OutputSet& output, const std::filesystem::path& scanPath,
                                         const Scan& scan, const ImportedTree& imported,
                                         double voxelIou, const JobOptions& options,
-                                        const Console& console);
+                                        const Console& console, const RunControl& control = {});
 
 /// The report of a finished reconstruction without its files (what the
 /// Python module returns): report.json's content with no outputs.

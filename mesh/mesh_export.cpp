@@ -90,7 +90,7 @@ class Progress {
   bool stopped() const { return control_.cancelled(); }
   // @throw std::runtime_error when the callback asked to stop.
   void check() const {
-    if (stopped()) throw std::runtime_error("meshTree: cancelled");
+    if (stopped()) throw CancelledError("meshTree: cancelled");
   }
 
  private:

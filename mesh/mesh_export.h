@@ -40,7 +40,7 @@ struct MeshOptions {
 ///        solid too small for the resolution (voxels below 1.5e-5; the message
 ///        names the primitive), `resolution` is outside [8, 2048],
 ///        `adaptivity` outside [0, 1], or the estimated memory exceeds
-///        `memoryLimitMiB`; std::runtime_error when `control` was cancelled.
+///        `memoryLimitMiB`; CancelledError when `control` was cancelled.
 TriangleMesh meshTree(const CsgTree& tree, const MeshOptions& options = {},
                       const RunControl& control = {});
 

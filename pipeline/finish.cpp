@@ -38,7 +38,14 @@ FinishResult finishTree(const PointCloud& scan, const CsgTree& tree, const Voxel
   fo.nearDistance = options.nearDistance;
   fo.maxIterations = options.maxIterations;
   fo.maxPoints = options.maxPoints;
+  fo.control = options.control;
   out.fit = fitTreeParameters(scan, tree, fo);
+  if (out.fit.cancelled) {
+    out.cancelled = true;
+    out.fit.tree = tree;
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  }
   out.ran = out.fit.iterations > 0;
   out.before = fitnessOf(scan, tree, options.fitness, voxels);
   out.after = out.before;

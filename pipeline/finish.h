@@ -27,6 +27,9 @@ struct FinishOptions {
   /// The fitness that judges the result (reconstruct() sets it to the
   /// hybrid refinement's).
   FitnessOptions fitness = {.voxelWeight = 1.0};
+  /// Past its deadline the fit keeps the parameters it has reached; a
+  /// cancel request stops it and keeps the input tree (reconstruct() sets it).
+  RunControl control;
 };
 
 /// What finishTree() did.
@@ -34,6 +37,7 @@ struct FinishResult {
   CsgTree tree;                       ///< the fitted tree if accepted, else the input
   bool ran = false;                   ///< the fit ran (enough points near the surface)
   bool accepted = false;              ///< the fitted parameters were kept
+  bool cancelled = false;             ///< options.control was cancelled: the input is kept
   TreeFitResult fit;                  ///< the fit's own figures (residual RMS, points, ...)
   Fitness before;                     ///< the input tree's fitness on all points
   Fitness after;                      ///< the fitted tree's (accepted or not)

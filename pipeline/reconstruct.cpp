@@ -194,6 +194,7 @@ void hybridMethod(Reconstruction& out, HybridMethodResult& hy, const PointCloud&
     clock.start("finish");
     FinishOptions fo = options.finish;
     fo.fitness = ho.fitness;
+    fo.control = control;
     const VoxelTarget target{out.grid, out.labels.inside};
     hy.finish = finishTree(scan, out.tree, &target, fo);
     const FinishResult& f = hy.finish;

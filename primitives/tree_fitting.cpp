@@ -418,6 +418,21 @@ class RefreshState final : public ceres::IterationCallback {
   const std::vector<double>& values_;
 };
 
+// Stops the solver when the run is cancelled (nothing usable) or past its
+// deadline (the parameters reached so far are the result).
+class StopWhenAsked final : public ceres::IterationCallback {
+ public:
+  explicit StopWhenAsked(const RunControl& control) : control_(control) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    if (control_.cancelled()) return ceres::SOLVER_ABORT;
+    if (control_.pastDeadline()) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const RunControl& control_;
+};
+
 // RMS of the field over the points with the given leaf primitives.
 double rmsField(const FitContext& c, std::span<const Vec3> points,
                 std::span<const Primitive> primitives) {
@@ -662,6 +677,10 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
   for (const std::size_t i : near) used.push_back(points[i]);
   out.rmsBefore = out.rmsAfter = rmsField(c, used, input);
   if (near.size() < 10) return out;
+  if (options.control.cancelled()) {
+    out.cancelled = true;
+    return out;
+  }
 
   // The problem: one residual per point over its active leaves' blocks.
   ceres::Problem::Options po;
@@ -672,11 +691,17 @@ TreeFitResult fitTreeParameters(const PointCloud& scan, const CsgTree& tree,
 
   RefreshState refresh(c, fit.values);
   ceres::Solver::Options so = solverOptions(options);
+  StopWhenAsked stop(options.control);
   so.callbacks.push_back(&refresh);
+  so.callbacks.push_back(&stop);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &fit.problem, &summary);
   out.iterations = int(summary.iterations.size()) - 1;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
+  if (options.control.cancelled()) {
+    out.cancelled = true;
+    return out;
+  }
 
   std::vector<Primitive> fitted;
   if (!summary.IsSolutionUsable() || !parameters.primitives(fit.values, fitted)) return out;

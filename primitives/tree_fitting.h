@@ -28,6 +28,7 @@
 
 #include "core/csg_tree.h"
 #include "core/point_cloud.h"
+#include "core/run_control.h"
 #include "core/sardf.h"
 #include "core/set_operations.h"
 #include "primitives/tree_parameters.h"
@@ -51,6 +52,9 @@ struct TreeFitOptions {
   int maxIterations = 25;     ///< Levenberg-Marquardt iterations at most (count)
   std::size_t maxPoints = 20000;    ///< more points than this are thinned to an even subset (count)
   TreeParameterOptions parameters;  ///< which relations are shared parameters
+  /// Checked every iteration: past its deadline the fit stops with the
+  /// parameters it has; cancelled, it stops and fits nothing.
+  RunControl control;
 };
 
 /// What fitTreeParameters did.
@@ -64,6 +68,7 @@ struct TreeFitResult {
   std::size_t primitivesChanged = 0;  ///< distinct leaves with a parameter moved by > 1e-6·D
   int iterations = 0;                 ///< solver iterations
   bool converged = false;             ///< the solver met its tolerances
+  bool cancelled = false;             ///< options.control was cancelled: nothing fitted
 };
 
 /// Fits the parameters of `tree` to the points of `scan` (its diagonal D

@@ -94,6 +94,35 @@ TEST(TreeFitting, RecoversPerturbedParametersOnACleanScan) {
     EXPECT_TRUE(leafNamed(r.tree, name).approxEqual(leafNamed(truth, name), 0.002)) << name;
 }
 
+// A cancel request stops the fit (nothing fitted) and the finish (input kept);
+// a deadline already past stops the solver at its first check with the
+// parameters it has.
+TEST(TreeFitting, ACancelStopsTheFitAndADeadlineKeepsWhatItReached) {
+  const CsgTree truth = bracket();
+  const PointCloud scan = sampled(truth, 0.0);
+  const CsgTree perturbed = bracket(0.3, 0.2);
+  TreeFitOptions cancelled;
+  cancelled.control.cancel();
+  const TreeFitResult stopped = fitTreeParameters(scan, perturbed, cancelled);
+  EXPECT_TRUE(stopped.cancelled);
+  EXPECT_EQ(stopped.primitivesChanged, 0u);
+  EXPECT_EQ(stopped.tree, perturbed);
+
+  TreeFitOptions late;
+  late.control = RunControl(1e-9);
+  const TreeFitResult first = fitTreeParameters(scan, perturbed, late);
+  EXPECT_FALSE(first.cancelled);
+  EXPECT_LE(first.iterations, 1);
+  EXPECT_GT(fitTreeParameters(scan, perturbed).iterations, 1);
+
+  FinishOptions fo;
+  fo.control.cancel();
+  const FinishResult f = finishTree(scan, perturbed, nullptr, fo);
+  EXPECT_TRUE(f.cancelled);
+  EXPECT_FALSE(f.accepted);
+  EXPECT_EQ(f.tree, perturbed);
+}
+
 TEST(TreeFitting, ReducesTheResidualOfAPerturbedTreeOnANoisyScan) {
   const CsgTree truth = bracket();
   // Noise 0.5 % of D, as the bundled noisy scans.

@@ -197,10 +197,12 @@ TEST(Reconstruction, CancelStopsEveryStage) {
       {Method::Hybrid, "detect"},       {Method::Hybrid, "hypotheses"},
       {Method::Hybrid, "labels"},       {Method::Hybrid, "description_sets"},
       {Method::Hybrid, "optimisation"}, {Method::Hybrid, "repair"},
-      {Method::Gp, "evolve"},           {Method::Voxel, "optimisation"}};
+      {Method::Hybrid, "finish"},       {Method::Gp, "evolve"},
+      {Method::Voxel, "optimisation"}};
   for (const auto& [method, at] : cases) {
     ReconstructOptions o;
     o.method = method;
+    o.finish.enabled = at == "finish";
     const RunControl control;
     std::chrono::steady_clock::time_point asked;
     std::vector<std::string> started;

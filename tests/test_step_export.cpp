@@ -9,7 +9,9 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <algorithm>
 #include <set>
+#include <thread>
 
 #include "cad/step_export.h"
 #include "cli_helpers.h"
@@ -127,6 +129,37 @@ TEST_F(StepExport, AnEmptySolidIsRefusedAndNoFileIsLeft) {
   }
   EXPECT_FALSE(fs::exists(path));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 0);
+}
+
+// A cancel request stops the export inside OpenCASCADE's booleans within
+// 0.5 s, and no file is left; one made before the export starts stops it
+// at once.
+TEST_F(StepExport, ACancelStopsTheExportAndLeavesNoFile) {
+  const CsgTree tree = readTreeJson(test::dataDir() / "knob" / "tree.json");
+  const fs::path path = dir_ / "knob.step";
+  StepOptions before;
+  before.control.cancel();
+  EXPECT_THROW(writeStep(path, tree, before), CancelledError);
+  EXPECT_FALSE(fs::exists(path));
+
+  // The knob's export takes more than a second: the request comes in its midst.
+  StepOptions during;
+  std::chrono::steady_clock::time_point asked;
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    asked = std::chrono::steady_clock::now();
+    during.control.cancel();
+  });
+  EXPECT_THROW(writeStep(path, tree, during), CancelledError);
+  const auto ended = std::chrono::steady_clock::now();
+  canceller.join();
+  EXPECT_LT(std::chrono::duration<double>(ended - asked).count(), 0.5 * CSGVOX_TEST_SLOWDOWN);
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_EQ(std::count_if(fs::directory_iterator(dir_), fs::directory_iterator(),
+                          [](const fs::directory_entry& e) {
+                            return e.path().filename().string().find(".tmp-") != std::string::npos;
+                          }),
+            0);
 }
 
 TEST_F(StepExport, ReadingANonStepFileIsAParseError) {
