@@ -32,16 +32,16 @@ constexpr NamedValue<ScannerNormals> kScannerNormalNames[] = {
     {"scanner", ScannerNormals::Scanner},
 };
 
-/// A finite number in the open interval (lo, hi).
-CLI::Validator inOpenRange(double lo, double hi) {
-  const std::string range =
-      "(" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + ")";
+/// A finite number in the open interval (lo, hi), or in (lo, hi] with `closedAbove`.
+CLI::Validator inOpenRange(double lo, double hi, bool closedAbove = false) {
+  const std::string range = "(" + CLI::detail::to_string(lo) + ", " +
+                            CLI::detail::to_string(hi) + (closedAbove ? "]" : ")");
   return CLI::Validator(
-      [lo, hi, range](std::string& text) -> std::string {
+      [lo, hi, range, closedAbove](std::string& text) -> std::string {
         const std::string closed = inRange(lo, hi)(text);
-        if (!closed.empty()) return closed;
+        if (!closed.empty() && closed.find(" is not in ") == std::string::npos) return closed;
         const double v = std::strtod(text.c_str(), nullptr);
-        if (v <= lo || v >= hi) return text + " is not in " + range;
+        if (!closed.empty() || v <= lo || (v >= hi && !(closedAbove && v == hi))) return text + " is not in " + range;
         return {};
       },
       "in " + range);
@@ -86,8 +86,8 @@ void addScannerOptions(CLI::App& app, SampleCommandOptions& opt, CLI::Option* sc
                         ->capture_default_str());
   options.push_back(app.add_option("--max-incidence", s.maxIncidence,
                                    "Scanner: hits at a larger angle between ray and surface "
-                                   "normal are dropped, degrees in (0, 90]")
-                        ->check(inRange(1e-9, 90.0))
+                                   "normal are dropped, degrees")
+                        ->check(inOpenRange(0.0, 90.0, true))
                         ->capture_default_str());
   options.push_back(app.add_option("--mixed-pixels", s.mixedPixels,
                                    "Scanner: probability that a pixel at a depth edge gives a "
@@ -97,7 +97,7 @@ void addScannerOptions(CLI::App& app, SampleCommandOptions& opt, CLI::Option* sc
   options.push_back(app.add_option("--depth-edge", s.depthEdge,
                                    "Scanner: a depth jump between neighbouring pixels larger "
                                    "than this many pixel footprints is a depth edge")
-                        ->check(inRange(1e-6, 1e6))
+                        ->check(inOpenRange(0.0, 1e6, true))
                         ->capture_default_str());
   options.push_back(app.add_option("--outliers", s.outliers,
                                    "Scanner: sparse outliers, fraction of each view's points")
@@ -149,7 +149,8 @@ Command setupSample(CLI::App& app, CommonOptions& common) {
                  "Output scan: .ply (binary, x y z [nx ny nz]) or .xyz (text, x y z [nx ny nz])")
       ->required();
   app.add_option("--points", opt->sample.points, "Number of points")
-      ->check(inRange(1, 100'000'000));
+      ->check(inRange(1, 100'000'000))
+      ->capture_default_str();
   CLI::Option* scanner = app.add_flag(
       "--scanner", opt->scanner,
       "Scan the tree with the turntable scanner model instead of sampling it uniformly "
