@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <string>
 
 #include "cli_helpers.h"
@@ -79,6 +80,39 @@ TEST_F(Cli, SampleScannerRefusesBadOptionsInOneLine) {
     EXPECT_EQ(r.code, 2) << b.args << "\n" << r.err;
     EXPECT_NE(r.err.find(b.named), std::string::npos) << b.args << "\n" << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "s.ply")) << b.args;
+  }
+}
+
+// Every bundled part carries a scanner scan: 20 000 raw x y z points near its
+// tree's surface (data/make_scans.sh).
+TEST(BundledScannerScans, EveryPartHasOneOfRawPointsNearItsTree) {
+  std::vector<fs::path> parts;
+  for (const fs::path& dir : {fs::path(CSGVOX_DATA_DIR), fs::path(CSGVOX_DATA_DIR) / "thin"}) {
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (fs::exists(e.path() / "tree.json")) parts.push_back(e.path());
+    }
+  }
+  ASSERT_GE(parts.size(), 16u);
+  for (const fs::path& part : parts) {
+    const fs::path scan = part / "scan_scanner.ply";
+    ASSERT_TRUE(fs::exists(scan)) << scan;
+    const std::string bytes = slurp(scan);
+    const std::string header = bytes.substr(0, bytes.find("end_header"));
+    EXPECT_NE(header.find("element vertex 20000"), std::string::npos) << scan;
+    EXPECT_EQ(header.find("nx"), std::string::npos) << scan;
+    EXPECT_NE(header.find("binary_little_endian"), std::string::npos) << scan;
+    // The binary data: float x y z per point.
+    const std::size_t data = bytes.find("end_header\n") + 11;
+    ASSERT_EQ(bytes.size() - data, 20000u * 3u * sizeof(float)) << scan;
+    const CsgTree tree = readTreeJson(part / "tree.json");
+    const double d = tree.bounds().diagonal();
+    std::size_t near = 0;
+    for (std::size_t i = 0; i < 20000; ++i) {
+      float xyz[3];
+      std::memcpy(xyz, bytes.data() + data + i * sizeof xyz, sizeof xyz);
+      near += std::abs(tree.value(Vec3(xyz[0], xyz[1], xyz[2]))) < 0.005 * d;
+    }
+    EXPECT_GT(double(near), 0.97 * 20000) << scan;
   }
 }
 
