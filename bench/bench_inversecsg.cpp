@@ -9,9 +9,21 @@
 //        [--models 011,039,...] [--samples S] [--time-limit T] [--no-finer-grid]
 //        [--no-unsupported-regions] [--finish] [--repair-searches K]
 //        [--repair-stall S] [--seed S] [--keep OUTDIR]
+//        [--scanner [--setups 1|2] [--depth-noise F] [--outliers F]
+//         [--mixed-pixels P] [--scanner-normals none|scanner]]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
+//   --scanner     each model is also scanned with the turntable scanner
+//                 model (scanner/scanner.h, docs/scanner.md: MeshCaster on the
+//                 mesh, --points points, seed 1) and reconstructed from that
+//                 scan; its row (scan `scanner`) follows the uniform one
+//                 (scan `uniform`), and the summary is given for each.
+//                 Missing normals are estimated as for a file without them.
+//                 --noise applies to the uniform scan only
+//   --setups, --depth-noise, --outliers, --mixed-pixels, --scanner-normals
+//                 the scanner model's options (as `csgvox sample --scanner`;
+//                 defaults: ScannerOptions)
 //   --res         ReconstructOptions::resolution (default 64)
 //   --method      hybrid (default), voxel or gp
 //   --models      comma-separated model names (default: all of the CSV)
@@ -67,12 +79,15 @@
 #include <vector>
 
 #include "core/statistics.h"
+#include "io/point_arrays.h"
 #include "io/mesh_files.h"
 #include "io/point_writer.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "mesh/mesh_solid.h"
 #include "pipeline/reconstruct.h"
+#include "scanner/mesh_caster.h"
+#include "scanner/scanner.h"
 
 namespace {
 
@@ -94,7 +109,14 @@ struct Options {
   Method method = Method::Hybrid;
   std::vector<std::string> models;
   std::filesystem::path keep;  // empty: write nothing
+  bool scanner = false;        // also run each model on a scanner-model scan
+  ScannerOptions scan;         // the scanner model's options (points and seed set per run)
 };
+
+// How a model's scan is made.
+enum class ScanKind { Uniform, Scanner };
+
+const char* scanKindName(ScanKind kind) { return kind == ScanKind::Uniform ? "uniform" : "scanner"; }
 
 // One line of inversecsg-results.csv.
 struct Reference {
@@ -190,22 +212,49 @@ Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::
   return o;
 }
 
+// The scanner model's scan of the mesh at `path`, with normals (the
+// scanner's, or estimated as for a file without them).
+PointCloud scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note) {
+  const TriangleMesh mesh = readMesh(path);
+  const MeshCaster caster(mesh);
+  ScannerOptions so = opt.scan;
+  so.points = opt.points;
+  so.seed = 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  const ScannerScan s = scanPart(caster, so);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "scan %.2f s at %d px, %zu mixed, %zu outliers; ", seconds,
+                s.resolution, s.counts.mixed, s.counts.outliers);
+  note = buf;
+  return scanFromArrays(s.cloud.points, s.cloud.normals, path.string()).cloud;
+}
+
 // Runs one model; never throws.
-Result runModel(const Options& opt, const std::string& model) {
+Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
   Result res;
   const std::filesystem::path path = opt.dir / (model + ".off");
   try {
-    ReadOptions rd;
-    rd.meshSamples = opt.points;
-    rd.seed = 1;
-    PointCloud scan = readScan(path, rd).cloud;
-    if (opt.noise > 0.0) {
+    std::string scanNote;
+    PointCloud scan;
+    if (kind == ScanKind::Scanner) {
+      scan = scannerScan(opt, path, scanNote);
+    } else {
+      ReadOptions rd;
+      rd.meshSamples = opt.points;
+      rd.seed = 1;
+      scan = readScan(path, rd).cloud;
+    }
+    if (kind == ScanKind::Uniform && opt.noise > 0.0) {
       const double sigma = opt.noise * scan.diagonal();
       std::mt19937_64 rng(7);
       std::normal_distribution<double> gauss(0.0, sigma);
       for (Vec3& p : scan.points) p += Vec3(gauss(rng), gauss(rng), gauss(rng));
     }
-    const std::filesystem::path keep = opt.keep.empty() ? opt.keep : opt.keep / model;
+    const std::filesystem::path keep =
+        opt.keep.empty() ? opt.keep
+                         : opt.keep / (kind == ScanKind::Scanner ? model + "-scanner" : model);
     if (!keep.empty()) {
       std::filesystem::create_directories(keep);
       writePointCloudPly(keep / "scan.ply", scan);  // floats, for viewers
@@ -225,7 +274,7 @@ Result runModel(const Options& opt, const std::string& model) {
     const Reconstruction rec = reconstruct(scan, ro, {}, RunControl(opt.timeLimit));
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.status = statusName(rec.status);
-    res.note = rec.message;
+    res.note = scanNote + rec.message;
     if (rec.resolution != opt.resolution) res.note += ", res " + std::to_string(rec.resolution);
     if (rec.timeLimitHit) res.note += " (time limit hit)";
     if (!rec.ok()) return res;
@@ -300,7 +349,7 @@ bool decode(const std::string& line, Result& r) {
 
 // Runs one model in a child process; the parent never builds anything large
 // nor starts TBB's threads, so forking is safe.
-Result runIsolated(const Options& opt, const std::string& model) {
+Result runIsolated(const Options& opt, const std::string& model, ScanKind kind) {
   int fds[2];
   Result r;
   if (pipe(fds) != 0) {
@@ -326,7 +375,7 @@ Result runIsolated(const Options& opt, const std::string& model) {
       dup2(devNull, STDERR_FILENO);
       close(devNull);
     }
-    const std::string line = encode(runModel(opt, model)) + "\n";
+    const std::string line = encode(runModel(opt, model, kind)) + "\n";
     std::size_t done = 0;
     while (done < line.size()) {
       const ssize_t n = write(fds[1], line.data() + done, line.size() - done);
@@ -395,7 +444,9 @@ int usage(const char* argv0) {
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-finer-grid] "
                "[--no-unsupported-regions] [--finish] [--repair-searches K] "
-               "[--repair-stall S] [--seed S] [--keep OUTDIR]\n",
+               "[--repair-stall S] [--seed S] [--keep OUTDIR] [--scanner [--setups 1|2] "
+               "[--depth-noise F] [--outliers F] [--mixed-pixels P] "
+               "[--scanner-normals none|scanner]]\n",
                argv0);
   return 2;
 }
@@ -425,6 +476,20 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       opt.seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--models" && hasValue) {
       opt.models = splitList(argv[++i]);
+    } else if (arg == "--scanner") {
+      opt.scanner = true;
+    } else if (arg == "--setups" && hasValue) {
+      opt.scan.setups = std::atoi(argv[++i]);
+    } else if (arg == "--depth-noise" && hasValue) {
+      opt.scan.depthNoise = std::atof(argv[++i]);
+    } else if (arg == "--outliers" && hasValue) {
+      opt.scan.outliers = std::atof(argv[++i]);
+    } else if (arg == "--mixed-pixels" && hasValue) {
+      opt.scan.mixedPixels = std::atof(argv[++i]);
+    } else if (arg == "--scanner-normals" && hasValue) {
+      const std::string name = argv[++i];
+      if (name != "none" && name != "scanner") return false;
+      opt.scan.normals = name == "none" ? ScannerNormals::None : ScannerNormals::Scanner;
     } else if (arg == "--keep" && hasValue) {
       opt.keep = argv[++i];
     } else if (arg == "--samples" && hasValue) {
@@ -443,6 +508,12 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       return false;
     }
   }
+  try {
+    opt.scan.validate();
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "scanner: %s\n", e.what());
+    return false;
+  }
   return !(opt.dir.empty() || opt.points == 0 || opt.resolution <= 0 || opt.iouSamples <= 0 ||
            opt.noise < 0.0 || opt.timeLimit < 0.0);
 }
@@ -458,6 +529,14 @@ void printHeading(const Options& opt) {
       std::string(methodName(opt.method)).c_str(), limitText,
       opt.finerGrid ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
   if (opt.seed != 1) std::printf("reconstruction seed: %llu\n", (unsigned long long)opt.seed);
+  if (opt.scanner) {
+    std::printf(
+        "scanner rows: %d setup(s), %d views x %zu elevations, depth noise %.4f D, outliers "
+        "%.4f, mixed pixels %.2f, normals %s\n",
+        opt.scan.setups, opt.scan.views, opt.scan.elevations.size(), opt.scan.depthNoise,
+        opt.scan.outliers, opt.scan.mixedPixels,
+        opt.scan.normals == ScannerNormals::None ? "estimated" : "scanner's");
+  }
   if (opt.repairSearches > 0 || opt.repairStall > 0)
     std::printf("hybrid searches per region: %zu, stall: %zu generations (0: the default)\n",
                 opt.repairSearches, opt.repairStall);
@@ -466,13 +545,14 @@ void printHeading(const Options& opt) {
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
       opt.iouSamples);
   std::printf("load average at start: %.2f\n", loadAverage());
-  std::printf("%-6s %6s %-13s %8s %5s %5s %5s %5s %7s  %s\n", "model", "faces", "status", "time_s",
-              "prims", "ics_p", "ops", "ics_o", "IoU", "note");
+  std::printf("%-6s %-7s %6s %-13s %8s %5s %5s %5s %5s %7s  %s\n", "model", "scan", "faces",
+              "status", "time_s", "prims", "ics_p", "ops", "ics_o", "IoU", "note");
 }
 
 // A model's row of the table: our result next to InverseCSG's `r`.
-void printRow(const std::string& model, const Reference& r, const Result& res) {
-  std::printf("%-6s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), r.faces,
+void printRow(const std::string& model, ScanKind kind, const Reference& r, const Result& res) {
+  std::printf("%-6s %-7s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), scanKindName(kind),
+              r.faces,
               res.status.c_str(), res.seconds, res.primitives, r.primitives, res.operations,
               r.operations);
   if (res.iou >= 0.0) {
@@ -509,10 +589,11 @@ struct Tally {
 };
 
 // The summary of the run.
-void printSummary(const Options& opt, const Tally& t) {
+void printSummary(const Options& opt, ScanKind kind, const Tally& t) {
   const std::size_t n = opt.models.size();
-  std::printf("\nsummary (%zu models, %zu points, noise %.4f D, res %d, method %s)\n", n,
-              opt.points, opt.noise, opt.resolution, std::string(methodName(opt.method)).c_str());
+  std::printf("\nsummary (%zu models, %s scans, %zu points, noise %.4f D, res %d, method %s)\n", n,
+              scanKindName(kind), opt.points, kind == ScanKind::Uniform ? opt.noise : 0.0,
+              opt.resolution, std::string(methodName(opt.method)).c_str());
   std::printf("  reconstructed (Ok):            %zu / %zu\n", t.ok, n);
   std::printf("  IoU measured:                  %zu (closed meshes among the reconstructed)\n",
               t.withIou);
@@ -545,14 +626,18 @@ int main(int argc, char** argv) {
   }
 
   printHeading(opt);
-  Tally tally;
+  std::vector<ScanKind> kinds = {ScanKind::Uniform};
+  if (opt.scanner) kinds.push_back(ScanKind::Scanner);
+  std::map<ScanKind, Tally> tally;
   for (const std::string& model : opt.models) {
     const auto ref = refs.find(model);
     const Reference r = ref != refs.end() ? ref->second : Reference{};
-    const Result res = runIsolated(opt, model);
-    printRow(model, r, res);
-    tally.add(res, r, ref != refs.end());
+    for (ScanKind kind : kinds) {
+      const Result res = runIsolated(opt, model, kind);
+      printRow(model, kind, r, res);
+      tally[kind].add(res, r, ref != refs.end());
+    }
   }
-  printSummary(opt, tally);
+  for (ScanKind kind : kinds) printSummary(opt, kind, tally[kind]);
   return 0;
 }

@@ -1200,7 +1200,11 @@ Everything here is generated: edit `make_parts.py` and run
     python3 data/make_parts.py
 
 which rewrites every `data/<part>/tree.json` and this README (standard
-library only, deterministic).
+library only, deterministic). `data/make_scans.sh` then writes each part's
+scans with `csgvox sample`: `scan.ply` (clean) and `scan_noisy.ply` (Gaussian
+noise, σ = 0.5 % of the diagonal), 10 000 points with normals, and
+`scan_scanner.ply`, 20 000 raw x y z points from the turntable scanner model
+at its defaults ([docs/scanner.md](../docs/scanner.md)).
 
 ## Design rules
 
