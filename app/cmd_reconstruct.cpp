@@ -1,4 +1,4 @@
-// The main job: csgvox SCAN [--res N] [-o OUTDIR] ...
+// The main job: csgvox SCAN [MORE_SCANS...] [--res N] [-o OUTDIR] ...
 // scan → surfaces → hypotheses → voxel labels → Wu's two optimisations →
 // tree.json, tree.scad, tree.txt, mesh.ply, report.json.
 
@@ -33,6 +33,9 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
   app.add_option("SCAN", opt->scan,
                  "Scan to reconstruct: PLY, XYZ, XYZN point cloud, or OFF/OBJ/STL/PLY mesh")
       ->required();
+  app.add_option("MORE_SCANS", opt->moreScans,
+                 "Further point clouds of the same part in the same frame (a scanner's exports "
+                 "of its views or setups), read together with SCAN as one scan");
   app.add_option("-o,--output", opt->outDir,
                  "Output directory (default: <scan folder>/<scan name>-csgvox/)");
   addJobOptions(app, opt->job);
@@ -44,12 +47,15 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     Stopwatch watch;
     ReadOptions ro;
     ro.seed = opt->job.reconstruct.seed;
-    const Scan scan = readScan(scanPath, ro);
+    std::vector<fs::path> inputs = {scanPath};
+    for (const std::string& more : opt->moreScans) inputs.emplace_back(more);
+    const Scan scan = readScans(inputs, ro);
     timings["read"] = watch.seconds();
-    console.info("read " + scanPath.string() + ": " + describeScan(scan));
+    console.info("read " + scanPath.string() +
+                 (inputs.size() > 1 ? " and " + std::to_string(inputs.size() - 1) + " more" : "") +
+                 ": " + describeScan(scan));
     // Outputs are checked against the input before the reconstruction, and
     // appear together at the end or not at all.
-    const fs::path inputs[] = {scanPath};
     OutputSet output(opt->outDir.empty()
                          ? scanPath.parent_path() / (scanPath.stem().string() + "-csgvox")
                          : fs::path(opt->outDir),

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
 #include "job/job.h"
 
@@ -14,6 +15,7 @@ namespace csgvox::app {
 /// `compare`).
 struct ScanJobOptions {
   std::string scan;    ///< the scan's path
+  std::vector<std::string> moreScans;  ///< further files of the same scan (the main job)
   std::string outDir;  ///< -o: the output folder (empty: beside the scan)
   JobOptions job;      ///< how to reconstruct it
 };

@@ -25,9 +25,11 @@ std::string describeScan(const Scan& scan) {
   } else if (scan.info.normalsEstimated) {
     std::snprintf(normals, sizeof(normals), "normals estimated");
   }
+  char files[64] = "";
+  if (!scan.info.files.empty()) std::snprintf(files, sizeof(files), " from %zu files", scan.info.files.size());
   char buf[512];
-  std::snprintf(buf, sizeof(buf), "%zu points (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s",
-                scan.cloud.size(), scan.info.format.c_str(),
+  std::snprintf(buf, sizeof(buf), "%zu points%s (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s",
+                scan.cloud.size(), files, scan.info.format.c_str(),
                 scan.info.fromMesh ? ", sampled from a mesh" : "", s.x(), s.y(), s.z(),
                 b.diagonal(), normals);
   return buf;
@@ -37,6 +39,7 @@ nlohmann::ordered_json scanJson(const std::filesystem::path& path, const Scan& s
   const Aabb b = scan.cloud.bounds();
   nlohmann::ordered_json j;
   j["file"] = path.string();
+  if (!scan.info.files.empty()) j["files"] = scan.info.files;
   j["format"] = scan.info.format;
   j["points"] = scan.cloud.size();
   j["from_mesh"] = scan.info.fromMesh;

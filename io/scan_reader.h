@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "core/point_cloud.h"
 
@@ -42,6 +43,9 @@ struct ScanInfo {
   /// (normalAgreement); -1 when the file had no normals or is a mesh.
   double normalAgreement = -1.0;
   std::size_t pointsRead = 0;  ///< points (for a mesh: vertices) read from the file
+  /// The files read into the scan, as given, when there are several
+  /// (readScans); empty for one file.
+  std::vector<std::string> files;
 };
 
 /// A scan read from a file.
@@ -82,6 +86,19 @@ enum class ScanFileType {
 ///        < 6, minNormalAgreement outside 0..1, meshSamples < minPoints for
 ///        a mesh).
 Scan readScan(const std::filesystem::path& path, const ReadOptions& options = {});
+
+/// Reads several point-cloud files that are already in one frame (a
+/// scanner's exports of its views or setups) as one scan: their points are
+/// put together, then treated as readScan() treats one file's (missing
+/// normals estimated on the whole). Normals are kept only when every file
+/// has them. options.minPoints applies to the whole; info.format is the
+/// first file's, info.pointsRead the sum, info.files the paths. One path:
+/// readScan(path).
+/// @throw IoError / ParseError as readScan(path), naming the file; ParseError
+///        when a file is a mesh (a mesh is a whole part, not a view of one)
+///        or the files together have fewer than options.minPoints points.
+/// @throw std::invalid_argument when `paths` is empty or options are invalid.
+Scan readScans(const std::vector<std::filesystem::path>& paths, const ReadOptions& options = {});
 
 /// Reads a scan of the given type from a stream opened in binary mode. The
 /// stream must be seekable (an std::ifstream or std::stringstream) and is
