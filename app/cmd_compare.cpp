@@ -128,6 +128,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     fo.resolution = base.resolution;
     fo.seed = base.seed;
     fo.detect = base.detect;
+    fo.detect.estimatedNormals = scan.info.normalsEstimated;
     fo.finerGrid = base.finerGrid;
     fo.memoryLimit = base.memoryLimit;
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, fo, {}, console.progress());

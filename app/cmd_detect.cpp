@@ -105,6 +105,7 @@ Command setupDetect(CLI::App& app, CommonOptions& common) {
     const fs::path inputs[] = {scanPath};
     OutputSet output(opt->outDir, {"surfaces.json", "candidates.json", "segments.ply"}, inputs);
 
+    opt->fit.detect.estimatedNormals = scan.info.normalsEstimated;
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, opt->fit);
     const DetectionResult& det = found.detection;
     console.info("detection: " + det.message);

@@ -61,6 +61,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
                          : fs::path(opt->outDir),
                      jobFiles(), inputs);
 
+    opt->job.reconstruct.detect.estimatedNormals = scan.info.normalsEstimated;
     const RunControl control(opt->job.timeLimit, console.progress());
     const Reconstruction rec = reconstruct(
         scan.cloud, opt->job.reconstruct,

@@ -16,7 +16,7 @@
 //                 diagonal; default 0); normals are kept
 //   --scanner     each model is also scanned with the turntable scanner
 //                 model (scanner/scanner.h, docs/scanner.md: MeshCaster on the
-//                 mesh, --points points, seed 1) and reconstructed from that
+//                 mesh, --points points, the scanner seed --seed) and reconstructed from that
 //                 scan; its row (scan `scanner`) follows the uniform one
 //                 (scan `uniform`), and the summary is given for each.
 //                 Missing normals are estimated as for a file without them.
@@ -214,12 +214,12 @@ Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::
 
 // The scanner model's scan of the mesh at `path`, with normals (the
 // scanner's, or estimated as for a file without them).
-PointCloud scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note) {
+Scan scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note) {
   const TriangleMesh mesh = readMesh(path);
   const MeshCaster caster(mesh);
   ScannerOptions so = opt.scan;
   so.points = opt.points;
-  so.seed = 1;
+  so.seed = opt.seed;
   const auto t0 = std::chrono::steady_clock::now();
   const ScannerScan s = scanPart(caster, so);
   const double seconds =
@@ -228,7 +228,7 @@ PointCloud scannerScan(const Options& opt, const std::filesystem::path& path, st
   std::snprintf(buf, sizeof buf, "scan %.2f s at %d px, %zu mixed, %zu outliers; ", seconds,
                 s.resolution, s.counts.mixed, s.counts.outliers);
   note = buf;
-  return scanFromArrays(s.cloud.points, s.cloud.normals, path.string()).cloud;
+  return scanFromArrays(s.cloud.points, s.cloud.normals, path.string());
 }
 
 // Runs one model; never throws.
@@ -238,8 +238,11 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
   try {
     std::string scanNote;
     PointCloud scan;
+    bool estimatedNormals = false;
     if (kind == ScanKind::Scanner) {
-      scan = scannerScan(opt, path, scanNote);
+      Scan scanned = scannerScan(opt, path, scanNote);
+      estimatedNormals = scanned.info.normalsEstimated;
+      scan = std::move(scanned.cloud);
     } else {
       ReadOptions rd;
       rd.meshSamples = opt.points;
@@ -270,6 +273,7 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     ro.finish.enabled = opt.finish;
     ro.seed = opt.seed;
     ro.method = opt.method;
+    ro.detect.estimatedNormals = estimatedNormals;
     const auto t0 = std::chrono::steady_clock::now();
     const Reconstruction rec = reconstruct(scan, ro, {}, RunControl(opt.timeLimit));
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

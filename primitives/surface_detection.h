@@ -34,6 +34,14 @@ struct DetectOptions {
       3.0;  ///< clusterEpsilon is at least this many times the median point spacing (ratio)
   double normalThreshold = 0.9;  ///< smallest cosine between an inlier's normal and the surface's
                                  ///< (RANSAC ignores the sign, the final assignment does not)
+  /// The normals were estimated from raw points (ScanInfo::normalsEstimated):
+  /// near sharp edges they blend the two faces and fail the normal test of
+  /// both, so after each stage the points a surface found beside them
+  /// explains by distance (within epsilon plus 3 x the local RMS of its
+  /// inliers, for a scanner's noise that grows at grazing incidence) are
+  /// not searched again (else small spurious surfaces explain those strips:
+  /// a false rounded edge). Given normals are trusted as they are.
+  bool estimatedNormals = false;
   double minPoints = 0.002;  ///< fewest inliers of a surface, fraction of the number of points N
   std::size_t minPointsFloor =
       12;  ///< fewest inliers of a surface, count (applies when minPoints*N is smaller)

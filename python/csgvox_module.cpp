@@ -103,6 +103,7 @@ Result reconstructArrays(const Array& points, const std::optional<Array>& normal
     ro.seed = seed;
     Stopwatch watch;
     const Scan scan = scanFromArrays(std::move(p), std::move(n), "points", ro);
+    options.detect.estimatedNormals = scan.info.normalsEstimated;
     nlohmann::ordered_json timings;
     timings["read"] = watch.seconds();
     const Reconstruction rec = reconstruct(scan.cloud, options, {}, RunControl(timeLimit));
