@@ -6,6 +6,7 @@
 
 #include "io/errors.h"
 #include "primitives/normal_estimation.h"
+#include "primitives/outlier_removal.h"
 
 namespace csgvox {
 
@@ -18,8 +19,29 @@ void checkReadOptions(const ReadOptions& options) {
   }
 }
 
+namespace {
+
+/// Removes the outliers of a point cloud (with their normals) and counts them.
+void removeOutliers(Scan& scan) {
+  const Outliers outliers = findOutliers(scan.cloud.points);
+  if (outliers.count() == 0) return;
+  PointCloud kept;
+  const bool normals = scan.cloud.hasNormals();
+  for (std::size_t i = 0; i < scan.cloud.size(); ++i) {
+    if (outliers.outlier[i]) continue;
+    kept.points.push_back(scan.cloud.points[i]);
+    if (normals) kept.normals.push_back(scan.cloud.normals[i]);
+  }
+  scan.cloud = std::move(kept);
+  scan.info.outliersRemoved = outliers.count();
+  scan.info.offSurfaceRemoved = outliers.offSurface;
+}
+
+}  // namespace
+
 void completeNormals(Scan& scan, const std::string& source, const ReadOptions& options) {
   if (scan.info.fromMesh) return;
+  if (options.removeOutliers) removeOutliers(scan);
   if (scan.cloud.hasNormals()) {
     // Normals that mostly disagree with the surface (random ones) would
     // leave detection nothing to find, slowly: they are estimated instead.

@@ -24,6 +24,9 @@ struct ReadOptions {
   /// random normals 0.1 to 0.18. 0 keeps given normals always (fraction, 0..1).
   double minNormalAgreement = 0.5;
   std::size_t minPoints = 100;  ///< a scan with fewer points is rejected (count)
+  /// Point clouds lose their outliers (scattered points, points off the
+  /// surface such as mixed pixels) before anything else (findOutliers).
+  bool removeOutliers = true;
 };
 
 /// What readScan found in the file.
@@ -42,6 +45,12 @@ struct ScanInfo {
   /// (normalAgreement); -1 when the file had no normals or is a mesh.
   double normalAgreement = -1.0;
   std::size_t pointsRead = 0;  ///< points (for a mesh: vertices) read from the file
+  /// Points of a point cloud removed as outliers (count; 0 for a mesh):
+  /// scattered ones plus offSurfaceRemoved.
+  std::size_t outliersRemoved = 0;
+  /// Of outliersRemoved, those off the surface of their neighbours (mixed
+  /// pixels at depth edges) rather than scattered (count).
+  std::size_t offSurfaceRemoved = 0;
 };
 
 /// A scan read from a file.
