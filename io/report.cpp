@@ -25,11 +25,17 @@ std::string describeScan(const Scan& scan) {
   } else if (scan.info.normalsEstimated) {
     std::snprintf(normals, sizeof(normals), "normals estimated");
   }
-  char buf[512];
-  std::snprintf(buf, sizeof(buf), "%zu points (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s",
+  char removed[128] = "";
+  if (scan.info.outliersRemoved > 0) {
+    std::snprintf(removed, sizeof(removed), ", removed %zu outliers (%zu off the surface)",
+                  scan.info.outliersRemoved, scan.info.offSurfaceRemoved);
+  }
+  char buf[640];
+  std::snprintf(buf, sizeof(buf),
+                "%zu points (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s%s",
                 scan.cloud.size(), scan.info.format.c_str(),
                 scan.info.fromMesh ? ", sampled from a mesh" : "", s.x(), s.y(), s.z(),
-                b.diagonal(), normals);
+                b.diagonal(), normals, removed);
   return buf;
 }
 
@@ -41,6 +47,10 @@ nlohmann::ordered_json scanJson(const std::filesystem::path& path, const Scan& s
   j["points"] = scan.cloud.size();
   j["from_mesh"] = scan.info.fromMesh;
   if (scan.info.fromMesh) j["mesh_faces"] = scan.info.meshFaces;
+  if (!scan.info.fromMesh) {
+    j["outliers_removed"] = scan.info.outliersRemoved;
+    j["off_surface_removed"] = scan.info.offSurfaceRemoved;
+  }
   j["normals"] = scan.info.normalsReplaced    ? "re-estimated"
                  : scan.info.normalsEstimated ? "estimated"
                                               : "given";
