@@ -86,7 +86,8 @@ enum class ScanFileType {
 ///        a line with another number of values than its header or (XYZ) the
 ///        first line, a word that is not a finite number, zero-length
 ///        normals, fewer than options.minPoints points, a mesh without faces
-///        or with zero area.
+///        or with zero area, or a point cloud whose points all lie on one
+///        plane within its noise (one view of a flat face).
 /// @throw std::invalid_argument when options are invalid (normalNeighbors
 ///        < 6, minNormalAgreement outside 0..1, meshSamples < minPoints for
 ///        a mesh).

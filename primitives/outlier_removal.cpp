@@ -74,6 +74,8 @@ Outliers findOutliers(std::span<const Vec3> points, const OutlierOptions& option
   const auto k = static_cast<unsigned>(options.neighbors);
   if (n <= k) return result;
   const Local local = localMeasures(points, k);
+  result.noise = median(local.planeRms);
+  result.spacing = median(local.spacing);
 
   // Scattered: spacing against the neighbours' spacing, on a log scale.
   std::vector<double> ratio(n), typical(n);
@@ -89,10 +91,10 @@ Outliers findOutliers(std::span<const Vec3> points, const OutlierOptions& option
   const double spread = kMadToSigma * median(std::move(deviation));
   const double scatteredAbove =
       std::max(std::log(options.spacingRatio), centre + options.robustSpread * spread);
-  const double farAbove = options.globalRatio * median(local.spacing);
+  const double farAbove = options.globalRatio * result.spacing;
 
   // Off the surface: distance to the neighbours' plane against their noise.
-  const double noise = median(local.planeRms);
+  const double noise = result.noise;
   for (std::size_t i = 0; i < n; ++i) {
     if (ratio[i] > scatteredAbove || local.spacing[i] > farAbove) {
       result.outlier[i] = true;

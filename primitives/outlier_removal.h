@@ -36,6 +36,8 @@ struct Outliers {
   std::vector<bool> outlier;  ///< per point
   std::size_t scattered = 0;   ///< far from their neighbours, relative to their neighbours' spacing
   std::size_t offSurface = 0;  ///< off the plane of their neighbours, relative to its noise
+  double spacing = 0.0;  ///< median mean distance of a point to its neighbours (scan units)
+  double noise = 0.0;    ///< median RMS distance of neighbourhoods to their planes (scan units)
   std::size_t count() const { return scattered + offSurface; }
 };
 
@@ -47,5 +49,6 @@ struct Outliers {
 /// `neighbors` points have no outliers.
 /// @throw std::invalid_argument if options.neighbors < 4.
 Outliers findOutliers(std::span<const Vec3> points, const OutlierOptions& options = {});
+
 
 }  // namespace csgvox
