@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
+#include "core/principal_axes.h"
 #include "io/errors.h"
 #include "primitives/normal_estimation.h"
+#include "primitives/outlier_removal.h"
 
 namespace csgvox {
 
@@ -18,8 +21,55 @@ void checkReadOptions(const ReadOptions& options) {
   }
 }
 
+namespace {
+
+// A cloud no thicker than this many times its noise is one flat face.
+constexpr double kFlatNoise = 3.0;
+// ... and has more than this fraction of its points within half its
+// thickness of its middle plane (0.38 for Gaussian noise, 0 for two layers).
+constexpr double kFlatMiddle = 0.2;
+
+/// Removes the outliers of a point cloud (with their normals) and counts
+/// them; rejects a cloud that is one flat face.
+/// @throw ParseError when all points lie on one plane, within the noise.
+void prepareCloud(Scan& scan, const std::string& source) {
+  const Outliers outliers = findOutliers(scan.cloud.points);
+  if (outliers.count() > 0) {
+    PointCloud kept;
+    const bool normals = scan.cloud.hasNormals();
+    for (std::size_t i = 0; i < scan.cloud.size(); ++i) {
+      if (outliers.outlier[i]) continue;
+      kept.points.push_back(scan.cloud.points[i]);
+      if (normals) kept.normals.push_back(scan.cloud.normals[i]);
+    }
+    scan.cloud = std::move(kept);
+    scan.info.outliersRemoved = outliers.count();
+    scan.info.offSurfaceRemoved = outliers.offSurface;
+  }
+  const std::size_t n = scan.cloud.size();
+  const PrincipalAxes axes = principalAxes(scan.cloud.points);
+  const double thickness = std::sqrt(std::max(0.0, axes.variances[2]));
+  // One face spreads about its plane like noise; the two faces of a plate
+  // thinner than the neighbourhoods (which then read its thickness as
+  // noise) leave few points near the middle plane.
+  std::size_t middle = 0;
+  for (const Vec3& p : scan.cloud.points) {
+    middle += std::abs(axes.leastAxis().dot(p - axes.mean)) < 0.5 * thickness;
+  }
+  if (axes.variances[1] > 0.0 && thickness <= kFlatNoise * outliers.noise &&
+      double(middle) > kFlatMiddle * double(n)) {
+    char within[64];
+    std::snprintf(within, sizeof(within), "%.3g", thickness);
+    throw ParseError(source + ": all " + std::to_string(n) + " points lie on one plane (within " +
+                     within + ", the scan's noise): one flat face bounds no solid");
+  }
+}
+
+}  // namespace
+
 void completeNormals(Scan& scan, const std::string& source, const ReadOptions& options) {
   if (scan.info.fromMesh) return;
+  if (options.removeOutliers) prepareCloud(scan, source);
   if (scan.cloud.hasNormals()) {
     // Normals that mostly disagree with the surface (random ones) would
     // leave detection nothing to find, slowly: they are estimated instead.

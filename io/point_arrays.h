@@ -16,13 +16,17 @@ namespace csgvox {
 ///        minNormalAgreement is outside 0..1.
 void checkReadOptions(const ReadOptions& options);
 
-/// Estimates the normals of a point cloud read without them, or with normals
+/// Removes the outliers of a point cloud (findOutliers; when
+/// options.removeOutliers, counted in info.outliersRemoved and
+/// offSurfaceRemoved), then estimates the normals of a point cloud read
+/// without them, or with normals
 /// of which fewer than options.minNormalAgreement agree with the local
 /// surface (nothing to do for a scan sampled from a mesh), as readScan()
 /// does, and sets info.normalsEstimated, normalsReplaced and
 /// normalAgreement.
 /// @throw ParseError "<source>: ..." when the points are too few for
-///        options.normalNeighbors neighbours or span no surface.
+///        options.normalNeighbors neighbours, span no surface, or all lie on
+///        one plane within their noise.
 void completeNormals(Scan& scan, const std::string& source, const ReadOptions& options = {});
 
 /// A scan from arrays: `normals` empty (estimated) or one per point (unit

@@ -25,13 +25,25 @@ std::string describeScan(const Scan& scan) {
   } else if (scan.info.normalsEstimated) {
     std::snprintf(normals, sizeof(normals), "normals estimated");
   }
+<<<<<<< HEAD
   char files[64] = "";
   if (!scan.info.files.empty()) std::snprintf(files, sizeof(files), " from %zu files", scan.info.files.size());
   char buf[512];
   std::snprintf(buf, sizeof(buf), "%zu points%s (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s",
                 scan.cloud.size(), files, scan.info.format.c_str(),
+=======
+  char removed[128] = "";
+  if (scan.info.outliersRemoved > 0) {
+    std::snprintf(removed, sizeof(removed), ", removed %zu outliers (%zu off the surface)",
+                  scan.info.outliersRemoved, scan.info.offSurfaceRemoved);
+  }
+  char buf[640];
+  std::snprintf(buf, sizeof(buf),
+                "%zu points (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s%s",
+                scan.cloud.size(), scan.info.format.c_str(),
+>>>>>>> raw-scan-prep
                 scan.info.fromMesh ? ", sampled from a mesh" : "", s.x(), s.y(), s.z(),
-                b.diagonal(), normals);
+                b.diagonal(), normals, removed);
   return buf;
 }
 
@@ -44,6 +56,10 @@ nlohmann::ordered_json scanJson(const std::filesystem::path& path, const Scan& s
   j["points"] = scan.cloud.size();
   j["from_mesh"] = scan.info.fromMesh;
   if (scan.info.fromMesh) j["mesh_faces"] = scan.info.meshFaces;
+  if (!scan.info.fromMesh) {
+    j["outliers_removed"] = scan.info.outliersRemoved;
+    j["off_surface_removed"] = scan.info.offSurfaceRemoved;
+  }
   j["normals"] = scan.info.normalsReplaced    ? "re-estimated"
                  : scan.info.normalsEstimated ? "estimated"
                                               : "given";

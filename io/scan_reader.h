@@ -25,6 +25,9 @@ struct ReadOptions {
   /// random normals 0.1 to 0.18. 0 keeps given normals always (fraction, 0..1).
   double minNormalAgreement = 0.5;
   std::size_t minPoints = 100;  ///< a scan with fewer points is rejected (count)
+  /// Point clouds lose their outliers (scattered points, points off the
+  /// surface such as mixed pixels) before anything else (findOutliers).
+  bool removeOutliers = true;
 };
 
 /// What readScan found in the file.
@@ -46,6 +49,12 @@ struct ScanInfo {
   /// The files read into the scan, as given, when there are several
   /// (readScans); empty for one file.
   std::vector<std::string> files;
+  /// Points of a point cloud removed as outliers (count; 0 for a mesh):
+  /// scattered ones plus offSurfaceRemoved.
+  std::size_t outliersRemoved = 0;
+  /// Of outliersRemoved, those off the surface of their neighbours (mixed
+  /// pixels at depth edges) rather than scattered (count).
+  std::size_t offSurfaceRemoved = 0;
 };
 
 /// A scan read from a file.
@@ -81,7 +90,8 @@ enum class ScanFileType {
 ///        a line with another number of values than its header or (XYZ) the
 ///        first line, a word that is not a finite number, zero-length
 ///        normals, fewer than options.minPoints points, a mesh without faces
-///        or with zero area.
+///        or with zero area, or a point cloud whose points all lie on one
+///        plane within its noise (one view of a flat face).
 /// @throw std::invalid_argument when options are invalid (normalNeighbors
 ///        < 6, minNormalAgreement outside 0..1, meshSamples < minPoints for
 ///        a mesh).

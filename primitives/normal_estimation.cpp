@@ -20,6 +20,7 @@
 #include "core/principal_axes.h"
 #include "core/statistics.h"
 #include "primitives/cgal_kernel.h"
+#include "primitives/normal_orientation.h"
 
 namespace csgvox {
 namespace {
@@ -30,6 +31,7 @@ using JetFitting = CGAL::Monge_via_jet_fitting<Kernel, Kernel, CGAL::Eigen_svd>;
 // Closest point pairs that decide how a piece is oriented against the
 // largest piece.
 constexpr std::size_t kMatchingPairs = 16;
+
 // A point lies on a tangent plane when closer to it than this fraction of
 // its neighbourhood radius, or than this multiple of the typical distance
 // of neighbourhoods to their planes (noise).
@@ -418,12 +420,14 @@ void estimateNormals(PointCloud& cloud, int neighbors) {
   sharpenAtEdges(points, normals, hoods);
   matchPieces(points, normals, orientAlongSpanningForest(points, normals, hoods));
   orientOutwards(points, normals);
+  std::vector<Vec3> unit(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    unit[i] = Vec3(normals[i].x(), normals[i].y(), normals[i].z()).normalized();
+  }
+  orientNormals(distinct.points, unit, hoods.indices, hoods.k);
 
   cloud.normals.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vector3& normal = normals[distinct.of[i]];
-    cloud.normals[i] = Vec3(normal.x(), normal.y(), normal.z()).normalized();
-  }
+  for (std::size_t i = 0; i < n; ++i) cloud.normals[i] = unit[distinct.of[i]];
 }
 
 double normalAgreement(const PointCloud& cloud, int neighbors) {

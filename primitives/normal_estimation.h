@@ -14,9 +14,12 @@ namespace csgvox {
 /// 3. orientations propagated along a minimum spanning forest of the
 ///    neighbour graph (Hoppe's method, with edges that cross the surface,
 ///    e.g. through a thin wall, made expensive); pieces the graph does not
-///    connect are matched to the largest piece by their closest points;
-/// 4. all normals flipped if, at the scan's extreme points along ±x, ±y, ±z,
-///    they mostly point inwards.
+///    connect are matched to the largest piece by their closest points; all
+///    normals flipped if, at the scan's extreme points along ±x, ±y, ±z,
+///    they mostly point inwards;
+/// 4. orientNormals: smooth patches that visibility from outside shows
+///    clearly (flat caps, bores, which the spanning forest may turn over
+///    as a whole) take the side it shows.
 ///
 /// Reliable for scans of closed surfaces sampled densely relative to their
 /// features; walls much thinner than the neighbourhood may still come out

@@ -1041,3 +1041,39 @@ TEST_F(ScanReaderTest, RejectsBrokenMeshFiles) {
 
 }  // namespace
 }  // namespace csgvox
+
+namespace csgvox {
+namespace {
+
+TEST(ReadScan, OneViewOfAFlatFaceIsRejectedWithOneLine) {
+  // 5000 points on a 50 x 30 plane with noise: no solid to reconstruct.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::stringstream xyz;
+  for (int i = 0; i < 5000; ++i) xyz << 50 * u(rng) << ' ' << 30 * u(rng) << ' ' << noise(rng) << '\n';
+  try {
+    readScan(xyz, ScanFileType::Xyz, "face.xyz");
+    ADD_FAILURE() << "no error";
+  } catch (const ParseError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("face.xyz: all 5000 points lie on one plane", 0), 0u) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos);
+  }
+}
+
+TEST(ReadScan, AThinPlateIsNotAFlatFace) {
+  // Both faces of a plate 1 thick (50 times the noise, about the spacing),
+  // 50 x 30. (Faces closer than their spacing and noise read as one.)
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::stringstream xyz;
+  for (int i = 0; i < 6000; ++i) {
+    xyz << 50 * u(rng) << ' ' << 30 * u(rng) << ' ' << (i % 2) * 1.0 + noise(rng) << '\n';
+  }
+  EXPECT_NO_THROW(readScan(xyz, ScanFileType::Xyz, "plate.xyz"));
+}
+
+}  // namespace
+}  // namespace csgvox

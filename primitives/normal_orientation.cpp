@@ -1,0 +1,252 @@
+#include "primitives/normal_orientation.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "core/statistics.h"
+
+namespace csgvox {
+namespace {
+
+// Neighbours whose normals are within this angle (sign ignored) lie on one
+// smooth patch.
+constexpr double kSmoothCosine = 0.906;  // cos 25 degrees
+// Every normal of a patch lies within this angle of its first point's.
+constexpr double kPatchConeCosine = 0.766;  // cos 40 degrees
+// A neighbour lies across the tangent plane (the other face of a thin wall)
+// when its offset along the normal exceeds this fraction of its distance and
+// kAcrossNoise times the noise.
+constexpr double kAcrossFraction = 0.5;
+constexpr double kAcrossNoise = 3.0;
+// Occupancy cells are this many median point spacings wide; each point
+// fills the cells within kFillSpacing of its own spacing.
+constexpr double kCellSpacings = 2.0;
+constexpr double kFillSpacing = 0.6;
+constexpr int kMaxCellsPerAxis = 400;
+// Rays per side: along the normal, and four tilted by kRayTilt radians.
+constexpr double kRayTilt = std::numbers::pi / 6.0;
+constexpr int kRaysPerSide = 5;
+// Points that cast rays, at most (a deterministic stride over the points).
+constexpr std::size_t kVisibilitySamples = 12000;
+// A patch's sign is decided by visibility when its mean vote (in -1..1, see
+// Votes) is at least this in magnitude.
+constexpr double kDecisiveVote = 0.35;
+struct Hoods {
+  std::span<const std::uint32_t> indices;
+  unsigned k;
+  const std::uint32_t* of(std::size_t i) const { return indices.data() + i * k; }
+};
+
+/// Noise level: the median RMS distance of neighbourhoods to tangent planes.
+double typicalResidual(std::span<const Vec3> points, std::span<const Vec3> normals,
+                       const Hoods& hoods) {
+  std::vector<double> residual(points.size());
+  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
+    double sum2 = 0.0;
+    for (unsigned l = 0; l < hoods.k; ++l) {
+      const double d = normals[i].dot(points[hoods.of(i)[l]] - points[i]);
+      sum2 += d * d;
+    }
+    residual[i] = std::sqrt(sum2 / hoods.k);
+  });
+  return median(std::move(residual));
+}
+
+/// Smooth patches: a label per point, and per patch its points.
+struct Patches {
+  std::vector<std::uint32_t> of;
+  std::vector<std::vector<std::uint32_t>> points;
+};
+
+bool smoothEdge(const Vec3& p, const Vec3& np, const Vec3& q, const Vec3& nq, double noise) {
+  if (std::abs(np.dot(nq)) < kSmoothCosine) return false;
+  const Vec3 d = q - p;
+  const double across = std::min(std::abs(np.dot(d)), std::abs(nq.dot(d)));
+  return across <= std::max(kAcrossFraction * d.norm(), kAcrossNoise * noise);
+}
+
+/// Splits the points into smooth patches, each within a cone of normals
+/// around its first point's, and makes the normals consistent within each
+/// (breadth-first from the patch's first point).
+Patches smoothPatches(std::span<const Vec3> points, std::span<Vec3> normals, const Hoods& hoods,
+                      double noise) {
+  const std::size_t n = points.size();
+  Patches patches;
+  patches.of.assign(n, UINT32_MAX);
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t seed = 0; seed < n; ++seed) {
+    if (patches.of[seed] != UINT32_MAX) continue;
+    const auto label = static_cast<std::uint32_t>(patches.points.size());
+    patches.points.emplace_back();
+    queue.assign(1, seed);
+    patches.of[seed] = label;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::uint32_t i = queue[head];
+      for (unsigned l = 1; l < hoods.k; ++l) {
+        const std::uint32_t j = hoods.of(i)[l];
+        if (patches.of[j] != UINT32_MAX) continue;
+        if (!smoothEdge(points[i], normals[i], points[j], normals[j], noise)) continue;
+        // Every normal of a patch stays near its first one, so the patch's
+        // orientation cannot turn over along a chain of noisy normals.
+        const double toSeed = normals[seed].dot(normals[j]);
+        if (std::abs(toSeed) < kPatchConeCosine) continue;
+        if (toSeed < 0.0) normals[j] = -normals[j];
+        patches.of[j] = label;
+        queue.push_back(j);
+      }
+    }
+    patches.points.back() = queue;
+  }
+  return patches;
+}
+
+/// Occupancy of a regular grid by the points, each filling the cells within
+/// a fraction of its spacing.
+class Occupancy {
+ public:
+  Occupancy(std::span<const Vec3> points, std::span<const double> spacing, double cell) {
+    Aabb box;
+    for (const Vec3& p : points) box.extend(p);
+    cell_ = std::max(cell, box.size().maxCoeff() / kMaxCellsPerAxis);
+    origin_ = box.min - Vec3::Constant(2.0 * cell_);
+    for (int a = 0; a < 3; ++a) dims_[a] = int(std::ceil(box.size()[a] / cell_)) + 4;
+    cells_.assign(std::size_t(dims_[0]) * dims_[1] * dims_[2], 0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Vec3 r = Vec3::Constant(kFillSpacing * spacing[i]);
+      const std::array<int, 3> lo = cellOf(points[i] - r), hi = cellOf(points[i] + r);
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int z = lo[2]; z <= hi[2]; ++z) cells_[index({x, y, z})] = 1;
+    }
+  }
+
+  double cell() const { return cell_; }
+
+  /// How many layers of occupied cells the ray from `from` along the unit
+  /// `dir`, starting `start` away, crosses before it leaves the grid.
+  int crossings(const Vec3& from, const Vec3& dir, double start) const {
+    const double step = 0.5 * cell_;
+    int count = 0;
+    bool inside = false;
+    for (double t = start;; t += step) {
+      const Vec3 c = (from + t * dir - origin_) / cell_;
+      if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= dims_[0] || c.y() >= dims_[1] ||
+          c.z() >= dims_[2]) {
+        return count;
+      }
+      const bool occupied = cells_[index({int(c.x()), int(c.y()), int(c.z())})] != 0;
+      if (occupied && !inside) ++count;
+      inside = occupied;
+    }
+  }
+
+ private:
+  std::array<int, 3> cellOf(const Vec3& p) const {
+    std::array<int, 3> c;
+    for (int a = 0; a < 3; ++a) {
+      c[a] = std::clamp(int(std::floor((p[a] - origin_[a]) / cell_)), 0, dims_[a] - 1);
+    }
+    return c;
+  }
+  std::size_t index(const std::array<int, 3>& c) const {
+    return (std::size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
+  }
+
+  double cell_ = 0.0;
+  Vec3 origin_;
+  std::array<int, 3> dims_{};
+  std::vector<unsigned char> cells_;
+};
+
+/// Per patch: the sum of its sampled points' visibility votes and their
+/// count. A point's vote is, over its rays on both sides, +1 for each ray
+/// that crosses the surface an even number of times on the side of its
+/// normal or an odd number on the other, -1 otherwise, over the ray count.
+struct Votes {
+  std::vector<double> sum;
+  std::vector<std::size_t> count;
+};
+
+Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normals,
+                      const Patches& patches, std::span<const double> spacing, double noise) {
+  const std::size_t n = points.size();
+  std::vector<double> sorted(spacing.begin(), spacing.end());
+  const Occupancy grid(points, spacing, kCellSpacings * median(sorted));
+  const std::size_t stride = std::max<std::size_t>(1, n / kVisibilitySamples);
+  const std::size_t samples = (n + stride - 1) / stride;
+  std::vector<double> vote(samples);
+  tbb::parallel_for(std::size_t{0}, samples, [&](std::size_t s) {
+    const std::size_t i = s * stride;
+    const Vec3& nrm = normals[i];
+    const Vec3 t1 = nrm.unitOrthogonal();
+    const Vec3 t2 = nrm.cross(t1);
+    const double start = 2.0 * grid.cell() + kFillSpacing * spacing[i] + kAcrossNoise * noise;
+    int score = 0;
+    for (double side : {1.0, -1.0}) {
+      for (int r = 0; r < kRaysPerSide; ++r) {
+        Vec3 dir = side * nrm;
+        if (r > 0) {
+          const double phi = (r - 1) * std::numbers::pi / 2.0;
+          dir = std::cos(kRayTilt) * dir +
+                std::sin(kRayTilt) * (std::cos(phi) * t1 + std::sin(phi) * t2);
+        }
+        // A ray that crosses the surface an even number of times ends
+        // where it started: outside when it leaves the grid.
+        const bool even = grid.crossings(points[i], dir.normalized(), start) % 2 == 0;
+        score += even ? int(side) : -int(side);
+      }
+    }
+    vote[s] = double(score) / (2 * kRaysPerSide);
+  });
+  Votes votes;
+  votes.sum.assign(patches.points.size(), 0.0);
+  votes.count.assign(patches.points.size(), 0);
+  for (std::size_t s = 0; s < samples; ++s) {
+    const std::uint32_t p = patches.of[s * stride];
+    votes.sum[p] += vote[s];
+    ++votes.count[p];
+  }
+  return votes;
+}
+
+}  // namespace
+
+void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
+                   std::span<const std::uint32_t> neighbours, unsigned k) {
+  const std::size_t n = points.size();
+  if (normals.size() != n || neighbours.size() != n * std::size_t(k) || k < 2) {
+    throw std::invalid_argument("orientNormals: sizes of points, normals, neighbours disagree");
+  }
+  if (n == 0) return;
+  const Hoods hoods{neighbours, k};
+  const double noise = typicalResidual(points, normals, hoods);
+  const std::vector<Vec3> provisional(normals.begin(), normals.end());
+  const Patches patches = smoothPatches(points, normals, hoods, noise);
+  // Spacing: the radius of a point's neighbourhood over sqrt(k / pi).
+  std::vector<double> spacing(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    spacing[i] = (points[hoods.of(i)[k - 1]] - points[i]).norm() * std::sqrt(std::numbers::pi / k);
+  }
+  const Votes votes = visibilityVotes(points, normals, patches, spacing, noise);
+  for (std::size_t p = 0; p < patches.points.size(); ++p) {
+    const double mean = votes.count[p] ? votes.sum[p] / double(votes.count[p]) : 0.0;
+    for (std::uint32_t i : patches.points[p]) {
+      if (std::abs(mean) < kDecisiveVote) {
+        normals[i] = provisional[i];  // a patch visibility leaves open keeps its orientation
+      } else if (mean < 0.0) {
+        normals[i] = -normals[i];
+      }
+    }
+  }
+}
+
+}  // namespace csgvox

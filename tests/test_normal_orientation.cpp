@@ -1,0 +1,116 @@
+// Tests for primitives/normal_orientation.h through estimateNormals, on
+// scanner-like raw scans (tests/raw_scan.h): the face the part stood on
+// unseen, noise, a doubled surface, a region ten times sparser; on thin
+// walls; and determinism across thread counts.
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <filesystem>
+#include <random>
+#include <vector>
+
+#include "core/nearest_neighbors.h"
+#include "io/scan_reader.h"
+#include "primitives/normal_estimation.h"
+#include "primitives/normal_orientation.h"
+#include "raw_scan.h"
+
+namespace csgvox {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The surface points of a raw scan (no outliers), without normals.
+PointCloud surfaceOf(const test::RawScan& raw, std::vector<Vec3>& truth) {
+  PointCloud cloud;
+  for (std::size_t i = 0; i < raw.points.size(); ++i) {
+    if (raw.kind[i] != 0) continue;
+    cloud.points.push_back(raw.points[i]);
+    truth.push_back(raw.normals[i]);
+  }
+  return cloud;
+}
+
+double signAgreement(const std::vector<Vec3>& estimated, const std::vector<Vec3>& truth) {
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) same += estimated[i].dot(truth[i]) > 0.0;
+  return double(same) / double(truth.size());
+}
+
+TEST(OrientNormals, RawScansWithAnUnseenFaceNoiseAndADoubledSurfaceFaceOutwards) {
+  for (const char* part : {"stepped_shaft", "flange"}) {
+    for (std::uint64_t seed : {1, 2}) {
+      SCOPED_TRACE(std::string(part) + " seed " + std::to_string(seed));
+      test::RawScanOptions o;
+      o.seed = seed;
+      std::vector<Vec3> truth;
+      PointCloud cloud = surfaceOf(test::makeRawScan(part, o), truth);
+      estimateNormals(cloud, 18);
+      // Measured: 0.987 to 0.996; the spanning forest alone gave 0.965 on
+      // the stepped shaft (caps turned inwards).
+      EXPECT_GE(signAgreement(cloud.normals, truth), 0.985);
+    }
+  }
+}
+
+TEST(OrientNormals, ThinWallsFaceOutwards) {
+  // A 1.5 mm sheet and a 2 mm pin, 20 000 points (spacing about 1 mm).
+  // Not yet: thin/slotted_plate (a 0.6 mm cut) reads 0.973, and
+  // thin/thin_tray (1 mm walls) about half inwards, as with the spanning
+  // forest alone.
+  for (const char* part : {"thin/sheet_bracket", "thin/pin_base"}) {
+    SCOPED_TRACE(part);
+    const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / part / "scan.ply");
+    PointCloud cloud{scan.cloud.points, {}};
+    estimateNormals(cloud, 18);
+    EXPECT_GE(signAgreement(cloud.normals, scan.cloud.normals), 0.99);
+  }
+}
+
+TEST(OrientNormals, VisibilityAloneOrientsAClosedScan) {
+  // Normals with random signs: visibility turns every smooth patch of the
+  // clean flange scan outwards.
+  const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / "flange" / "scan.ply");
+  std::vector<Vec3> normals = scan.cloud.normals;
+  std::mt19937 rng(3);
+  for (Vec3& n : normals) {
+    if (rng() & 1u) n = -n;
+  }
+  const NearestNeighbors tree(scan.cloud.points);
+  std::vector<std::uint32_t> hoods, hood;
+  for (const Vec3& p : scan.cloud.points) {
+    tree.kNearest(p, 18, hood);
+    hoods.insert(hoods.end(), hood.begin(), hood.end());
+  }
+  orientNormals(scan.cloud.points, normals, hoods, 18);
+  // Measured 0.971 on these 10 000 points (0.9999 on 100 000 points of the
+  // same part); patches the rays leave open keep their random signs.
+  EXPECT_GE(signAgreement(normals, scan.cloud.normals), 0.95);
+}
+
+TEST(OrientNormals, SameNormalsWithAnyNumberOfThreads) {
+  test::RawScanOptions o;
+  o.points = 6000;
+  std::vector<Vec3> truth;
+  const PointCloud raw = surfaceOf(test::makeRawScan("flange", o), truth);
+  PointCloud one = raw, two = raw;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    estimateNormals(one, 18);
+  }
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    estimateNormals(two, 18);
+  }
+  EXPECT_EQ(one.normals, two.normals);
+}
+
+TEST(OrientNormals, RejectsMismatchedSizes) {
+  std::vector<Vec3> points(10, Vec3::Zero()), normals(9, Vec3::UnitZ());
+  std::vector<std::uint32_t> hoods(20, 0);
+  EXPECT_THROW(orientNormals(points, normals, hoods, 2), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace csgvox
