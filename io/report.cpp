@@ -25,13 +25,10 @@ std::string describeScan(const Scan& scan) {
   } else if (scan.info.normalsEstimated) {
     std::snprintf(normals, sizeof(normals), "normals estimated");
   }
-<<<<<<< HEAD
   char files[64] = "";
-  if (!scan.info.files.empty()) std::snprintf(files, sizeof(files), " from %zu files", scan.info.files.size());
-  char buf[512];
-  std::snprintf(buf, sizeof(buf), "%zu points%s (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s",
-                scan.cloud.size(), files, scan.info.format.c_str(),
-=======
+  if (!scan.info.files.empty()) {
+    std::snprintf(files, sizeof(files), " from %zu files", scan.info.files.size());
+  }
   char removed[128] = "";
   if (scan.info.outliersRemoved > 0) {
     std::snprintf(removed, sizeof(removed), ", removed %zu outliers (%zu off the surface)",
@@ -39,9 +36,8 @@ std::string describeScan(const Scan& scan) {
   }
   char buf[640];
   std::snprintf(buf, sizeof(buf),
-                "%zu points (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s%s",
-                scan.cloud.size(), scan.info.format.c_str(),
->>>>>>> raw-scan-prep
+                "%zu points%s (%s%s), size %.4g x %.4g x %.4g, diagonal %.4g, %s%s",
+                scan.cloud.size(), files, scan.info.format.c_str(),
                 scan.info.fromMesh ? ", sampled from a mesh" : "", s.x(), s.y(), s.z(),
                 b.diagonal(), normals, removed);
   return buf;
