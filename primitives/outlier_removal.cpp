@@ -104,7 +104,7 @@ Outliers findOutliers(std::span<const Vec3> points, const OutlierOptions& option
     const double limit = std::max({options.offPlaneFactor * local.planeRms[i],
                                    options.offPlaneFactor * noise,
                                    options.offSpacing * typical[i]});
-    if (local.offPlane[i] > limit) {
+    if (local.offPlane[i] > limit && ratio[i] > std::log(options.offRatio)) {
       result.outlier[i] = true;
       ++result.offSurface;
     }

@@ -25,10 +25,13 @@ struct OutlierOptions {
   double globalRatio = 5.0;
   /// A point is off the surface when its distance to the plane of its
   /// neighbours exceeds this many times their own RMS distance to it, this
-  /// many times the scan's typical RMS distance (noise), and offSpacing of
-  /// the neighbours' spacing.
+  /// many times the scan's typical RMS distance (noise), and offSpacing
+  /// times the neighbours' spacing, and its own spacing exceeds theirs by
+  /// offRatio (a corner lies about one spacing off the plane of its
+  /// neighbours, but as close to them as they are to each other).
   double offPlaneFactor = 5.0;
-  double offSpacing = 1.0;  ///< fraction of the local spacing (see offPlaneFactor)
+  double offSpacing = 1.0;  ///< multiple of the local spacing (see offPlaneFactor)
+  double offRatio = 1.5;    ///< ratio of spacings (see offPlaneFactor)
 };
 
 /// Which points are outliers, and why.
