@@ -1,0 +1,109 @@
+// The main job on every bundled part's scanner scan (data/<part>/scan_scanner.ply:
+// the scanner model's defaults, two setups, raw x y z, 20 000 points), read
+// as the main job reads it (outliers removed, normals estimated and
+// oriented) and compared with the part's true tree: IoU >= 0.97 and at most
+// two primitives more than the truth. The parts that do not reach that bar
+// yet are listed with their measured figure and reason; each must not fall
+// further, and the test fails when one starts to pass (take it off the list).
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "io/scan_reader.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "pipeline/reconstruct.h"
+#include "test_helpers.h"
+
+namespace csgvox {
+namespace {
+
+struct KnownGap {
+  const char* part;
+  double floor;  // the IoU it must keep (measured less 0.05)
+  const char* reason;
+};
+
+const std::vector<KnownGap> kKnownGaps = {
+    {"bearing_housing", 0.73,
+     "IoU 0.78: the visibility test turns the bore's normals inward, the tree fills the bore"},
+    {"countersunk_plate", 0.90, "IoU 0.956, 11 of 12 primitives; cause not yet analysed"},
+    {"housing_complex", 0.88, "IoU 0.935, 9 of 17 primitives; cause not yet analysed"},
+    {"knob", 0.91, "IoU 0.968, its 6 primitives; cause not yet analysed"},
+    {"pipe_tee", 0.72, "IoU 0.775, 6 primitives for 4; cause not yet analysed"},
+    {"sheet_bracket", 0.49, "IoU 0.546, 16 primitives for 5 (1.5 mm sheet); cause not yet analysed"},
+    {"thin_tray", 0.05,
+     "IoU 0.098: 1 mm walls one sample spacing apart; about half the normals inward and the "
+     "noise estimated at 0.48 (the wall's two faces), the tray is filled"},
+};
+
+const KnownGap* knownGap(const std::string& part) {
+  for (const KnownGap& g : kKnownGaps) {
+    if (part == g.part) return &g;
+  }
+  return nullptr;
+}
+
+// Folder of each bundled part: data/<part> and data/thin/<part>.
+std::vector<std::string> partFolders() {
+  std::vector<std::string> folders = test::partNames();
+  for (const auto& e : std::filesystem::directory_iterator(test::dataDir() / "thin")) {
+    if (e.is_directory() && std::filesystem::exists(e.path() / "tree.json")) {
+      folders.push_back("thin/" + e.path().filename().string());
+    }
+  }
+  return folders;
+}
+
+double treeIou(const CsgTree& a, const CsgTree& b) {
+  Aabb box = a.bounds();
+  const Aabb bb = b.bounds();
+  box.min = box.min.cwiseMin(bb.min);
+  box.max = box.max.cwiseMax(bb.max);
+  return test::sampledIou(
+      box, [&](const Vec3& p) { return a.contains(p); },
+      [&](const Vec3& p) { return b.contains(p); }, 400000, 7);
+}
+
+class ScannerScan : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ScannerScan, VolumeAndPrimitiveCount) {
+  const std::string folder = GetParam();
+  const std::string part = std::filesystem::path(folder).filename().string();
+  const CsgTree truth = readTreeJson(test::dataDir() / folder / "tree.json");
+  const Scan scan = readScan(test::dataDir() / folder / "scan_scanner.ply");
+  ASSERT_TRUE(scan.info.normalsEstimated);
+  ReconstructOptions options;
+  options.detect.estimatedNormals = scan.info.normalsEstimated;
+  const Reconstruction rec = reconstruct(scan.cloud, options);
+  ASSERT_TRUE(rec.ok()) << rec.message;
+  const double iou = treeIou(rec.tree, truth);
+  const std::size_t prims = rec.tree.primitiveCount();
+  const bool passes = iou >= 0.97 && prims <= truth.primitiveCount() + 2;
+  std::printf("%s: IoU %.4f, %zu primitives (truth %zu), %zu outliers removed\n", folder.c_str(),
+              iou, prims, truth.primitiveCount(), scan.info.outliersRemoved);
+  RecordProperty("iou", std::to_string(iou));
+  if (const KnownGap* g = knownGap(part)) {
+    EXPECT_FALSE(passes) << folder << " reaches the bar now: take it off kKnownGaps";
+    EXPECT_GE(iou, g->floor) << folder << " (" << g->reason << ")";
+    std::printf("known gap: %s\n", g->reason);
+    return;
+  }
+  EXPECT_GE(iou, 0.97) << folder;
+  EXPECT_LE(prims, truth.primitiveCount() + 2) << folder;
+}
+
+INSTANTIATE_TEST_SUITE_P(BundledParts, ScannerScan, ::testing::ValuesIn(partFolders()),
+                         [](const auto& info) {
+                           std::string name = info.param;
+                           for (char& ch : name) {
+                             if (ch == '/') ch = '_';
+                           }
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace csgvox
