@@ -55,17 +55,6 @@ std::vector<Case> allCases() {
   return cases;
 }
 
-/// Volumetric IoU of two bounded trees, on random points of their joint bounds.
-double treeIou(const CsgTree& a, const CsgTree& b) {
-  Aabb box = a.bounds();
-  const Aabb bb = b.bounds();
-  box.min = box.min.cwiseMin(bb.min);
-  box.max = box.max.cwiseMax(bb.max);
-  return test::sampledIou(
-      box, [&](const Vec3& p) { return a.contains(p); },
-      [&](const Vec3& p) { return b.contains(p); }, 400000, 7);
-}
-
 class ReconstructionVsTruth : public ::testing::TestWithParam<Case> {};
 
 TEST_P(ReconstructionVsTruth, VolumeAndPrimitiveCount) {
@@ -77,7 +66,7 @@ TEST_P(ReconstructionVsTruth, VolumeAndPrimitiveCount) {
   double iou = 0.0;
   std::size_t prims = 0;
   if (rec.ok()) {
-    iou = treeIou(rec.tree, truth);
+    iou = test::treeIou(rec.tree, truth);
     prims = rec.tree.primitiveCount();
   }
   // Chamfer distance to the scan catches what volume hides: a sub-voxel lid

@@ -58,16 +58,6 @@ std::vector<std::string> partFolders() {
   return folders;
 }
 
-double treeIou(const CsgTree& a, const CsgTree& b) {
-  Aabb box = a.bounds();
-  const Aabb bb = b.bounds();
-  box.min = box.min.cwiseMin(bb.min);
-  box.max = box.max.cwiseMax(bb.max);
-  return test::sampledIou(
-      box, [&](const Vec3& p) { return a.contains(p); },
-      [&](const Vec3& p) { return b.contains(p); }, 400000, 7);
-}
-
 class ScannerScan : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ScannerScan, VolumeAndPrimitiveCount) {
@@ -80,7 +70,7 @@ TEST_P(ScannerScan, VolumeAndPrimitiveCount) {
   options.detect.estimatedNormals = scan.info.normalsEstimated;
   const Reconstruction rec = reconstruct(scan.cloud, options);
   ASSERT_TRUE(rec.ok()) << rec.message;
-  const double iou = treeIou(rec.tree, truth);
+  const double iou = test::treeIou(rec.tree, truth);
   const std::size_t prims = rec.tree.primitiveCount();
   const bool passes = iou >= 0.97 && prims <= truth.primitiveCount() + 2;
   std::printf("%s: IoU %.4f, %zu primitives (truth %zu), %zu outliers removed\n", folder.c_str(),
