@@ -104,7 +104,8 @@ TEST_F(ScanFiles, AMeshOrTooFewPointsInAllIsRefusedNamingTheProblem) {
   EXPECT_THROW(readScans({}), std::invalid_argument);
 }
 
-// The main job reads the two halves as the flange and says so.
+// The main job reads the two halves as one scan and says so: the tree is
+// the one of the same points in one file.
 TEST_F(ScanFiles, TheMainJobTakesSeveralFiles) {
   const fs::path out = dir_ / "out";
   const RunResult r = run("'" + left_.string() + "' '" + right_.string() + "' -o '" +
@@ -120,8 +121,17 @@ TEST_F(ScanFiles, TheMainJobTakesSeveralFiles) {
   ASSERT_EQ(report["input"]["files"].size(), 2u);
   EXPECT_EQ(report["input"]["files"][0].get<std::string>(), left_.string());
   EXPECT_EQ(report["input"]["normals"].get<std::string>(), "estimated");
-  // The flange's 11 primitives, or within two of them.
-  EXPECT_NEAR(report["tree"]["primitives"].get<double>(), 11.0, 2.0);
+
+  PointCloud both = side(whole_, 0.0, true, false);
+  const PointCloud right = side(whole_, 0.0, false, false);
+  both.points.insert(both.points.end(), right.points.begin(), right.points.end());
+  const fs::path one = dir_ / "both.ply";
+  writePointCloudPly(one, both);
+  const fs::path oneOut = dir_ / "one";
+  const RunResult single =
+      run("'" + one.string() + "' -o '" + oneOut.string() + "' --no-preview", dir_);
+  ASSERT_EQ(single.code, 0) << single.err;
+  EXPECT_EQ(slurp(out / "tree.json"), slurp(oneOut / "tree.json"));
 }
 
 }  // namespace
