@@ -52,9 +52,10 @@ void prepareCloud(Scan& scan, const std::string& source) {
   // One face spreads about its plane like noise; the two faces of a plate
   // thinner than the neighbourhoods (which then read its thickness as
   // noise) leave few points near the middle plane.
+  const Vec3 across = axes.leastAxis();
   std::size_t middle = 0;
   for (const Vec3& p : scan.cloud.points) {
-    middle += std::abs(axes.leastAxis().dot(p - axes.mean)) < 0.5 * thickness;
+    middle += std::abs(across.dot(p - axes.mean)) < 0.5 * thickness;
   }
   if (axes.variances[1] > 0.0 && thickness <= kFlatNoise * outliers.noise &&
       double(middle) > kFlatMiddle * double(n)) {

@@ -20,11 +20,21 @@ Scan readScan(std::istream& in, ScanFileType type, const std::string& source,
   return scan;
 }
 
-Scan readScan(const std::filesystem::path& path, const ReadOptions& options) {
+namespace {
+
+// The file opened for reading, after the checks every scan file passes.
+std::ifstream openScanFile(const std::filesystem::path& path) {
   requireReadableFile(path);
-  const ScanFileType type = scanFileTypeFromPath(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot be opened for reading");
+  return in;
+}
+
+}  // namespace
+
+Scan readScan(const std::filesystem::path& path, const ReadOptions& options) {
+  std::ifstream in = openScanFile(path);
+  const ScanFileType type = scanFileTypeFromPath(path);
   return readScan(in, type, path.string(), options);
 }
 
@@ -38,10 +48,9 @@ Scan readScans(const std::vector<std::filesystem::path>& paths, const ReadOption
   bool normals = true;
   std::vector<PointCloud> clouds;
   for (const std::filesystem::path& path : paths) {
-    requireReadableFile(path);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path.string() + ": cannot be opened for reading");
-    Scan one = readScanContent(in, scanFileTypeFromPath(path), path.string(), each);
+    std::ifstream in = openScanFile(path);
+    const ScanFileType type = scanFileTypeFromPath(path);
+    Scan one = readScanContent(in, type, path.string(), each);
     if (one.info.fromMesh) {
       throw ParseError(path.string() +
                        ": is a mesh; only point clouds (views of one part) can be read together");

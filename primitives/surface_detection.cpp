@@ -634,9 +634,10 @@ void dropExplainedLeftovers(const PointCloud& cloud, const NearestNeighbors& nn,
   std::vector<char> drop(subset.size(), 0);
   tbb::parallel_for(std::size_t{0}, subset.size(), [&](std::size_t j) {
     const Vec3& p = cloud.points[subset[j]];
-    std::vector<std::uint32_t> near;
+    thread_local std::vector<std::uint32_t> near;
+    thread_local std::vector<int> seen;
     nn.kNearest(p, k + 1, near);
-    std::vector<int> seen;
+    seen.clear();
     for (const std::uint32_t q : near) {
       const int s = assignment[q];
       if (s < 0 || std::find(seen.begin(), seen.end(), s) != seen.end()) continue;
