@@ -10,7 +10,8 @@
 //        [--no-unsupported-regions] [--finish] [--repair-searches K]
 //        [--repair-stall S] [--seed S] [--keep OUTDIR]
 //        [--scanner [--setups 1|2] [--depth-noise F] [--outliers F]
-//         [--mixed-pixels P] [--scanner-normals none|scanner]]
+//         [--mixed-pixels P] [--scanner-normals none|scanner]
+//         [--registration-shift F] [--registration-turn R] [--scanner-only]]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -21,7 +22,9 @@
 //                 (scan `uniform`), and the summary is given for each.
 //                 Missing normals are estimated as for a file without them.
 //                 --noise applies to the uniform scan only
-//   --setups, --depth-noise, --outliers, --mixed-pixels, --scanner-normals
+//   --scanner-only  the scanner rows only (no uniform scan)
+//   --setups, --depth-noise, --outliers, --mixed-pixels, --scanner-normals,
+//   --registration-shift (fraction of D), --registration-turn (radians)
 //                 the scanner model's options (as `csgvox sample --scanner`;
 //                 defaults: ScannerOptions)
 //   --res         ReconstructOptions::resolution (default 64)
@@ -110,6 +113,7 @@ struct Options {
   std::vector<std::string> models;
   std::filesystem::path keep;  // empty: write nothing
   bool scanner = false;        // also run each model on a scanner-model scan
+  bool uniform = true;         // run each model on a uniform scan
   ScannerOptions scan;         // the scanner model's options (points and seed set per run)
 };
 
@@ -450,7 +454,8 @@ int usage(const char* argv0) {
                "[--no-unsupported-regions] [--finish] [--repair-searches K] "
                "[--repair-stall S] [--seed S] [--keep OUTDIR] [--scanner [--setups 1|2] "
                "[--depth-noise F] [--outliers F] [--mixed-pixels P] "
-               "[--scanner-normals none|scanner]]\n",
+               "[--scanner-normals none|scanner] [--registration-shift F] [--registration-turn R] "
+               "[--scanner-only]]\n",
                argv0);
   return 2;
 }
@@ -484,6 +489,13 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       opt.scanner = true;
     } else if (arg == "--setups" && hasValue) {
       opt.scan.setups = std::atoi(argv[++i]);
+    } else if (arg == "--scanner-only") {
+      opt.scanner = true;
+      opt.uniform = false;
+    } else if (arg == "--registration-shift" && hasValue) {
+      opt.scan.registrationTranslation = std::atof(argv[++i]);
+    } else if (arg == "--registration-turn" && hasValue) {
+      opt.scan.registrationRotation = std::atof(argv[++i]);
     } else if (arg == "--depth-noise" && hasValue) {
       opt.scan.depthNoise = std::atof(argv[++i]);
     } else if (arg == "--outliers" && hasValue) {
@@ -630,7 +642,8 @@ int main(int argc, char** argv) {
   }
 
   printHeading(opt);
-  std::vector<ScanKind> kinds = {ScanKind::Uniform};
+  std::vector<ScanKind> kinds;
+  if (opt.uniform) kinds.push_back(ScanKind::Uniform);
   if (opt.scanner) kinds.push_back(ScanKind::Scanner);
   std::map<ScanKind, Tally> tally;
   for (const std::string& model : opt.models) {
