@@ -94,6 +94,12 @@ void addScannerOptions(CLI::App& app, SampleCommandOptions& opt, CLI::Option* sc
                                    "point between the two depths")
                         ->check(inRange(0.0, 1.0))
                         ->capture_default_str());
+  options.push_back(app.add_option("--density-variation", s.densityVariation,
+                                   "Scanner: density at the dense end of the part over the sparse "
+                                   "end's, a smooth ramp along the part's longest side (1: as the "
+                                   "views give it)")
+                        ->check(inRange(1.0, 1000.0))
+                        ->capture_default_str());
   options.push_back(app.add_option("--depth-edge", s.depthEdge,
                                    "Scanner: a depth jump between neighbouring pixels larger "
                                    "than this many pixel footprints is a depth edge")

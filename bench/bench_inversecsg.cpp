@@ -11,7 +11,8 @@
 //        [--repair-stall S] [--seed S] [--keep OUTDIR]
 //        [--scanner [--setups 1|2] [--depth-noise F] [--outliers F]
 //         [--mixed-pixels P] [--scanner-normals none|scanner]
-//         [--registration-shift F] [--registration-turn R] [--scanner-only]]
+//         [--registration-shift F] [--registration-turn R]
+//         [--density-variation F] [--scanner-only]]
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
@@ -24,7 +25,8 @@
 //                 --noise applies to the uniform scan only
 //   --scanner-only  the scanner rows only (no uniform scan)
 //   --setups, --depth-noise, --outliers, --mixed-pixels, --scanner-normals,
-//   --registration-shift (fraction of D), --registration-turn (radians)
+//   --registration-shift (fraction of D), --registration-turn (radians),
+//   --density-variation (dense end over sparse end, >= 1)
 //                 the scanner model's options (as `csgvox sample --scanner`;
 //                 defaults: ScannerOptions)
 //   --res         ReconstructOptions::resolution (default 64)
@@ -455,7 +457,7 @@ int usage(const char* argv0) {
                "[--repair-stall S] [--seed S] [--keep OUTDIR] [--scanner [--setups 1|2] "
                "[--depth-noise F] [--outliers F] [--mixed-pixels P] "
                "[--scanner-normals none|scanner] [--registration-shift F] [--registration-turn R] "
-               "[--scanner-only]]\n",
+               "[--density-variation F] [--scanner-only]]\n",
                argv0);
   return 2;
 }
@@ -492,6 +494,8 @@ bool parseArguments(int argc, char** argv, Options& opt) {
     } else if (arg == "--scanner-only") {
       opt.scanner = true;
       opt.uniform = false;
+    } else if (arg == "--density-variation" && hasValue) {
+      opt.scan.densityVariation = std::atof(argv[++i]);
     } else if (arg == "--registration-shift" && hasValue) {
       opt.scan.registrationTranslation = std::atof(argv[++i]);
     } else if (arg == "--registration-turn" && hasValue) {
@@ -548,9 +552,11 @@ void printHeading(const Options& opt) {
   if (opt.scanner) {
     std::printf(
         "scanner rows: %d setup(s), %d views x %zu elevations, depth noise %.4f D, outliers "
-        "%.4f, mixed pixels %.2f, normals %s\n",
+        "%.4f, mixed pixels %.2f, registration %.4f D and %.4f rad, density variation %g, "
+        "normals %s\n",
         opt.scan.setups, opt.scan.views, opt.scan.elevations.size(), opt.scan.depthNoise,
-        opt.scan.outliers, opt.scan.mixedPixels,
+        opt.scan.outliers, opt.scan.mixedPixels, opt.scan.registrationTranslation,
+        opt.scan.registrationRotation, opt.scan.densityVariation,
         opt.scan.normals == ScannerNormals::None ? "estimated" : "scanner's");
   }
   if (opt.repairSearches > 0 || opt.repairStall > 0)

@@ -326,16 +326,82 @@ ScannerScan scanAll(const Scene& scene, int side) {
   return scan;
 }
 
-// Keeps a random `count` of the scan's points, in their order.
-void keepSubset(ScannerScan& scan, std::size_t count, std::uint64_t seed) {
+// Points the views must give so that `wanted` can be kept with the density
+// ramp: the dense end keeps all its points, the rest keep a fraction of
+// theirs (the ramp's mean weight, (1 - 1/F) / ln F, for F > 1).
+// Points kept of `scanned` (every point when there is no density ramp).
+std::size_t pointsToKeep(std::size_t scanned, double densityVariation) {
+  if (densityVariation <= 1.0) return scanned;
+  const double f = densityVariation;
+  return std::size_t(double(scanned) * (1.0 - 1.0 / f) / std::log(f));
+}
+
+std::size_t pointsToScan(std::size_t wanted, double densityVariation) {
+  if (densityVariation <= 1.0) return wanted;
+  const double f = densityVariation;
+  const double meanWeight = (1.0 - 1.0 / f) / std::log(f);
+  return std::size_t(std::ceil(1.02 * double(wanted) / meanWeight));
+}
+
+// Keeps a random `count` of the scan's points, in their order. With a
+// density ramp, a point at relative position s in [0, 1] along the box's
+// longest side (of the surface points' box) is kept with a probability
+// proportional to F^-s.
+void keepSubset(ScannerScan& scan, std::size_t count, const ScannerOptions& o) {
   const std::size_t n = scan.cloud.size();
   if (count >= n) return;
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::mt19937_64 rng(mixSeed(seed, 2000));
-  for (std::size_t i = 0; i < count; ++i) {
-    std::uniform_int_distribution<std::size_t> pick(i, n - 1);
-    std::swap(order[i], order[pick(rng)]);
+  std::mt19937_64 rng(mixSeed(o.seed, 2000));
+  if (o.densityVariation > 1.0) {
+    Aabb box;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (scan.kinds[k] == ScanPointKind::Surface) box.extend(scan.cloud.points[k]);
+    }
+    int axis = 0;
+    box.size().maxCoeff(&axis);
+    const double lo = box.min[axis], span = std::max(box.size()[axis], 1e-300);
+    const double logF = std::log(o.densityVariation);
+    std::vector<double> weight(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double s = std::clamp((scan.cloud.points[k][axis] - lo) / span, 0.0, 1.0);
+      weight[k] = std::exp(-s * logF);
+    }
+    // Inclusion probabilities min(1, c w) summing to `count` (c by
+    // bisection), then systematic sampling over a random order: exactly
+    // those probabilities, so the kept density follows the ramp.
+    const auto expected = [&](double c) {
+      double sum = 0.0;
+      for (double w : weight) sum += std::min(1.0, c * w);
+      return sum;
+    };
+    double cLo = 0.0, cHi = 1.0;
+    while (expected(cHi) < double(count)) cHi *= 2.0;
+    for (int it = 0; it < 100; ++it) {
+      const double mid = 0.5 * (cLo + cHi);
+      (expected(mid) < double(count) ? cLo : cHi) = mid;
+    }
+    std::shuffle(order.begin(), order.end(), rng);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    double next = unit(rng), cumulative = 0.0;
+    std::vector<std::size_t> chosen, rest;
+    for (std::size_t k : order) {
+      cumulative += std::min(1.0, cHi * weight[k]);
+      if (cumulative >= next && chosen.size() < count) {
+        chosen.push_back(k);
+        next += 1.0;
+      } else {
+        rest.push_back(k);
+      }
+    }
+    // Rounding can leave one short: the first of the rest (random order).
+    for (std::size_t r = 0; chosen.size() < count && r < rest.size(); ++r) chosen.push_back(rest[r]);
+    order = std::move(chosen);
+  } else {
+    for (std::size_t i = 0; i < count; ++i) {
+      std::uniform_int_distribution<std::size_t> pick(i, n - 1);
+      std::swap(order[i], order[pick(rng)]);
+    }
   }
   order.resize(count);
   std::sort(order.begin(), order.end());
@@ -386,6 +452,8 @@ void ScannerOptions::validate() const {
           "field of view " + number(fieldOfView) + " is not in (0, 120) degrees");
   require(std::isfinite(standoff) && standoff >= 1.0 && standoff <= 100.0,
           "standoff must be in [1, 100]");
+  require(std::isfinite(densityVariation) && densityVariation >= 1.0 && densityVariation <= 1000.0,
+          "density variation must be in [1, 1000], got " + number(densityVariation));
   require(resolution >= 0 && resolution <= kMaxResolution,
           "resolution must be in [0, " + std::to_string(kMaxResolution) + "] pixels");
 }
@@ -407,15 +475,17 @@ ScannerScan scanPart(const RayCaster& caster, const ScannerOptions& options) {
   scene.setups = makeSetups(options, box, diagonal);
   scene.cameras = makeCameras(options, box, scene.range);
 
-  const std::size_t wanted = options.points;
+  const std::size_t kept = options.points;
+  const std::size_t wanted = pointsToScan(kept, options.densityVariation);
   if (options.resolution > 0 || wanted == 0) {
     ScannerScan scan = scanAll(scene, options.resolution > 0 ? options.resolution : 256);
-    if (scan.cloud.size() < wanted) {
+    if (scan.cloud.size() < kept) {
       throw std::invalid_argument("resolution " + std::to_string(scan.resolution) + " gives " +
                                   std::to_string(scan.cloud.size()) + " points, fewer than the " +
-                                  std::to_string(wanted) + " asked for");
+                                  std::to_string(kept) + " asked for");
     }
-    keepSubset(scan, wanted == 0 ? scan.cloud.size() : wanted, options.seed);
+    keepSubset(scan, kept == 0 ? pointsToKeep(scan.cloud.size(), options.densityVariation) : kept,
+               options);
     return scan;
   }
   // Points grow with the pixel count: size the image from a small run, then
@@ -442,7 +512,7 @@ ScannerScan scanPart(const RayCaster& caster, const ScannerOptions& options) {
     side = std::min(int(std::ceil(side * grow)), kMaxResolution);
     scan = scanAll(scene, side);
   }
-  keepSubset(scan, wanted, options.seed);
+  keepSubset(scan, kept, options);
   return scan;
 }
 

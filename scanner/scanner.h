@@ -44,6 +44,7 @@ struct ScannerOptions {
   double outlierMargin = 0.1;                     ///< outliers lie in the part's box grown by this, fraction of D, >= 0
   double fieldOfView = 30.0;                      ///< full angle of the camera's square image, degrees in (0, 120)
   double standoff = 1.1;                          ///< camera distance over the one where the part's bounding sphere just fills the image, >= 1
+  double densityVariation = 1.0;                  ///< density at the dense end of the part over the sparse end's, >= 1: a smooth ramp along the part's longest side
   ScannerNormals normals = ScannerNormals::None;  ///< raw xyz or the scanner's normals
   std::size_t points = 20000;                     ///< points returned (a random subset of the views' points); 0: every point
   int resolution = 0;                             ///< image side in pixels; 0: the smallest that gives `points` (256 when points is 0)

@@ -309,6 +309,35 @@ TEST(Scanner, PointsGivesExactlyThatMany) {
   EXPECT_THROW(scanPart(caster, o), std::invalid_argument);
 }
 
+TEST(Scanner, DensityVariationRampsTheDensityAlongTheLongestSide) {
+  // The block's longest side is x (4 long): a ramp of F = 10 keeps points at
+  // the low-x end with weight about 10^-0.05 and at the high-x end about
+  // 10^-0.95, so the ends' density ratio grows by about 7.9 over the even scan.
+  const CsgTree tree = blockWithHole();
+  const TreeCaster caster(tree);
+  const auto endRatio = [&](double variation) {
+    ScannerOptions o;
+    o.points = 20000;
+    o.outliers = 0.0;
+    o.mixedPixels = 0.0;
+    o.densityVariation = variation;
+    const ScannerScan s = scanPart(caster, o);
+    EXPECT_EQ(s.cloud.size(), 20000u);
+    double low = 0, high = 0;
+    for (const Vec3& p : s.cloud.points) {
+      low += p.x() < -1.6;
+      high += p.x() > 1.6;
+    }
+    return low / std::max(high, 1.0);
+  };
+  const double even = endRatio(1.0);
+  const double ramped = endRatio(10.0);
+  EXPECT_GT(even, 0.7);
+  EXPECT_LT(even, 1.4);
+  EXPECT_GT(ramped / even, 6.0);
+  EXPECT_LT(ramped / even, 10.0);
+}
+
 TEST(Scanner, TreeAndMeshCastersAgree) {
   // A box by hand (exact), and a cylinder through the project's mesher.
   Box box;
@@ -425,6 +454,9 @@ TEST(Scanner, BadOptionsAreRefusedNamingTheOption) {
   o = {};
   o.maxIncidence = 0;
   EXPECT_NE(message(o).find("max incidence"), std::string::npos);
+  o = {};
+  o.densityVariation = 0.5;
+  EXPECT_NE(message(o).find("density variation"), std::string::npos);
   o = {};
   o.views = 0;
   EXPECT_NE(message(o).find("views"), std::string::npos);
