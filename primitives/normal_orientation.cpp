@@ -24,17 +24,34 @@ constexpr double kSmoothCosine = 0.906;  // cos 25 degrees
 constexpr double kPatchConeCosine = 0.766;  // cos 40 degrees
 // A neighbour lies across the tangent plane (the other face of a thin wall)
 // when its offset along the normal exceeds this fraction of its distance and
-// kAcrossNoise times the noise.
-constexpr double kAcrossFraction = 0.5;
+// kAcrossNoise times the noise. A curved face's neighbours at distance d lie
+// d / 2R off the plane, so faces of radius above 3.3 spacings stay whole.
+constexpr double kAcrossFraction = 0.15;
 constexpr double kAcrossNoise = 3.0;
-// Occupancy cells are this many median point spacings wide; each point
-// fills the cells within kFillSpacing of its own spacing.
-constexpr double kCellSpacings = 2.0;
+// Occupancy cells are this many median point spacings wide (fine enough to
+// tell the two faces of a wall three spacings thick apart); each point fills
+// the cells within kFillSpacing of its own spacing.
+constexpr double kCellSpacings = 1.0;
 constexpr double kFillSpacing = 0.6;
 constexpr int kMaxCellsPerAxis = 400;
 // Rays per side: along the normal, and four tilted by kRayTilt radians.
 constexpr double kRayTilt = std::numbers::pi / 6.0;
 constexpr int kRaysPerSide = 5;
+// Rays start this many cells plus the point's fill and kAcrossNoise times the
+// noise from it: clear of its own layer.
+constexpr double kStartCells = 1.0;
+// Escape rays: this many directions evenly over the sphere, those within
+// acos(kEscapeMinCosine) of the normal or its opposite.
+constexpr int kEscapeDirections = 96;
+constexpr double kEscapeMinCosine = 0.5;
+// A neighbour with a parallel normal lies on a face across the tangent plane
+// when its offset along the normal exceeds this fraction of its distance (and
+// kAcrossNoise times the noise).
+constexpr double kParallelFaceFraction = 0.25;
+// The noise level is this quantile of the neighbourhoods' residuals: low
+// enough that the neighbourhoods spanning both faces of thin walls (their
+// residual is half the wall) do not set it.
+constexpr double kNoiseQuantile = 0.2;
 // Points that cast rays, at most (a deterministic stride over the points).
 constexpr std::size_t kVisibilitySamples = 12000;
 // A patch's sign is decided by visibility when its mean vote (in -1..1, see
@@ -46,7 +63,8 @@ struct Hoods {
   const std::uint32_t* of(std::size_t i) const { return indices.data() + i * k; }
 };
 
-/// Noise level: the median RMS distance of neighbourhoods to tangent planes.
+/// Noise level: a low quantile (kNoiseQuantile) of the neighbourhoods' RMS
+/// distances to their tangent planes.
 double typicalResidual(std::span<const Vec3> points, std::span<const Vec3> normals,
                        const Hoods& hoods) {
   std::vector<double> residual(points.size());
@@ -58,7 +76,9 @@ double typicalResidual(std::span<const Vec3> points, std::span<const Vec3> norma
     }
     residual[i] = std::sqrt(sum2 / hoods.k);
   });
-  return median(std::move(residual));
+  const auto at = residual.begin() + std::ptrdiff_t(kNoiseQuantile * double(residual.size() - 1));
+  std::nth_element(residual.begin(), at, residual.end());
+  return *at;
 }
 
 /// Smooth patches: a label per point, and per patch its points.
@@ -131,6 +151,20 @@ class Occupancy {
 
   double cell() const { return cell_; }
 
+  /// True when the ray from `from` along the unit `dir`, starting `start`
+  /// away, leaves the grid without meeting an occupied cell.
+  bool escapes(const Vec3& from, const Vec3& dir, double start) const {
+    const double step = 0.5 * cell_;
+    for (double t = start;; t += step) {
+      const Vec3 c = (from + t * dir - origin_) / cell_;
+      if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= dims_[0] || c.y() >= dims_[1] ||
+          c.z() >= dims_[2]) {
+        return true;
+      }
+      if (cells_[index({int(c.x()), int(c.y()), int(c.z())})] != 0) return false;
+    }
+  }
+
   /// How many layers of occupied cells the ray from `from` along the unit
   /// `dir`, starting `start` away, crosses before it leaves the grid.
   int crossings(const Vec3& from, const Vec3& dir, double start) const {
@@ -177,21 +211,47 @@ struct Votes {
 };
 
 Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normals,
-                      const Patches& patches, std::span<const double> spacing, double noise) {
+                      const Patches& patches, std::span<const double> spacing, double noise,
+                      const Hoods& hoods) {
   const std::size_t n = points.size();
   std::vector<double> sorted(spacing.begin(), spacing.end());
   const Occupancy grid(points, spacing, kCellSpacings * median(sorted));
   const std::size_t stride = std::max<std::size_t>(1, n / kVisibilitySamples);
   const std::size_t samples = (n + stride - 1) / stride;
+  // Escape directions: a Fibonacci lattice on the sphere.
+  std::vector<Vec3> dirs;
+  for (int d = 0; d < kEscapeDirections; ++d) {
+    const double z = 1.0 - (2.0 * d + 1.0) / kEscapeDirections;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = d * std::numbers::pi * (3.0 - std::sqrt(5.0));
+    dirs.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+  }
   std::vector<double> vote(samples);
   tbb::parallel_for(std::size_t{0}, samples, [&](std::size_t s) {
     const std::size_t i = s * stride;
     const Vec3& nrm = normals[i];
     const Vec3 t1 = nrm.unitOrthogonal();
     const Vec3 t2 = nrm.cross(t1);
-    const double start = 2.0 * grid.cell() + kFillSpacing * spacing[i] + kAcrossNoise * noise;
+    const double start = kStartCells * grid.cell() + kFillSpacing * spacing[i] + kAcrossNoise * noise;
+    // A face of a thin wall or slot: a parallel face lies across the tangent
+    // plane on one side, nearer than the grid resolves; that side's rays
+    // would jump it, so only the other side's rays vote.
+    bool across[2] = {false, false};
+    for (unsigned l = 1; l < hoods.k; ++l) {
+      const std::uint32_t j = hoods.of(i)[l];
+      if (std::abs(nrm.dot(normals[j])) < kSmoothCosine) continue;
+      const Vec3 d = points[j] - points[i];
+      const double offset = nrm.dot(d);
+      if (std::abs(offset) > std::max(kParallelFaceFraction * d.norm(), kAcrossNoise * noise)) {
+        across[offset > 0 ? 0 : 1] = true;
+      }
+    }
+    const bool skip[2] = {across[0] && !across[1], across[1] && !across[0]};
     int score = 0;
+    int rays = 0;
     for (double side : {1.0, -1.0}) {
+      if (skip[side > 0 ? 0 : 1]) continue;
+      rays += kRaysPerSide;
       for (int r = 0; r < kRaysPerSide; ++r) {
         Vec3 dir = side * nrm;
         if (r > 0) {
@@ -205,7 +265,20 @@ Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normal
         score += even ? int(side) : -int(side);
       }
     }
-    vote[s] = double(score) / (2 * kRaysPerSide);
+    vote[s] = double(score) / rays;
+    // A ray that meets no surface at all is the clearest sign of outside:
+    // where rays escape on one side only, that side is outside (a surface
+    // inside a concavity or a bore, whose parity rays may pass unseen walls,
+    // is seen from outside through its opening). Escapes on both sides mean
+    // a face the scanner never saw lets rays out of the material: parity
+    // decides.
+    int out = 0, in = 0;
+    for (const Vec3& d : dirs) {
+      const double c = d.dot(nrm);
+      if (std::abs(c) < kEscapeMinCosine || skip[c > 0 ? 0 : 1]) continue;
+      if (grid.escapes(points[i], d, start)) ++(c > 0 ? out : in);
+    }
+    if ((out > 0) != (in > 0)) vote[s] = out > 0 ? 1.0 : -1.0;
   });
   Votes votes;
   votes.sum.assign(patches.points.size(), 0.0);
@@ -236,7 +309,7 @@ void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
   for (std::size_t i = 0; i < n; ++i) {
     spacing[i] = (points[hoods.of(i)[k - 1]] - points[i]).norm() * std::sqrt(std::numbers::pi / k);
   }
-  const Votes votes = visibilityVotes(points, normals, patches, spacing, noise);
+  const Votes votes = visibilityVotes(points, normals, patches, spacing, noise, hoods);
   for (std::size_t p = 0; p < patches.points.size(); ++p) {
     const double mean = votes.count[p] ? votes.sum[p] / double(votes.count[p]) : 0.0;
     for (std::uint32_t i : patches.points[p]) {

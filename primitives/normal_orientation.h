@@ -15,17 +15,27 @@ namespace csgvox {
 ///
 /// 1. Smooth patches: neighbours whose normals are within 25 degrees (sign
 ///    ignored), within 40 degrees of the patch's first normal, and which do
-///    not lie across each other's tangent planes (the two faces of a thin
-///    wall) join one patch; within a patch the normals are made consistent.
-/// 2. Visibility: rays along +n and -n (and four rays tilted by 30 degrees on
-///    each side) march through an occupancy grid of the points (cells twice
-///    the median spacing, each point filling its own spacing), starting
-///    clear of the point's own layer; a ray that crosses the surface an even
+///    not lie across each other's tangent planes (off by more than 0.15 of
+///    their distance and 3 times the noise, a low quantile of the
+///    neighbourhoods' residuals: the two faces of a thin wall) join one
+///    patch; within a patch the normals are made consistent.
+/// 2. Visibility: rays march through an occupancy grid of the points (cells
+///    one median spacing wide, each point filling its own spacing), starting
+///    clear of the point's own layer. Parity rays, along +n and -n and four
+///    tilted by 30 degrees on each side: one that crosses the surface an even
 ///    number of times before it leaves the grid started outside, so flat
-///    caps, bores and faces in a concavity vote alike.
+///    caps, bores and faces in a concavity vote alike. Escape rays, 96
+///    directions over the sphere within 60 degrees of +n or -n: where some
+///    leave the grid without meeting any surface on one side only, that side
+///    is outside (a face inside a concavity, whose parity rays may pass
+///    through walls the scanner never saw, is seen through its opening);
+///    escapes on both sides (out of the material through a face never seen)
+///    leave the vote to parity. A face with a parallel face close across its
+///    tangent plane on one side (a thin wall or slot, closer than the grid
+///    resolves) votes with the other side's rays only.
 /// 3. A patch whose points vote clearly (mean vote at least 0.35 of the
-///    full vote) takes that side; the others (thin walls, where both sides
-///    look alike, faces next to an unseen one) keep the incoming normals.
+///    full vote) takes that side; the others (faces next to an unseen one,
+///    where both sides look alike) keep the incoming normals.
 ///
 /// `neighbours` holds k indices per point, the point itself first (its k
 /// nearest neighbours). Deterministic with any number of threads.
