@@ -72,7 +72,13 @@ void classify(DesignedLeaf& leaf, const Primitive& p, double tol) {
   if (const auto* b = p.as<Box>()) {
     bool all = true;
     for (int j = 0; j < 3; ++j) all = all && aligned(b->axes.col(j), tol, a);
-    if (all) leaf.form = LeafForm::AlignedBox;
+    if (all) {
+      leaf.form = LeafForm::AlignedBox;
+    } else {
+      for (int j = 0; j < 3; ++j) {
+        if (std::abs(b->axes(2, j)) >= std::cos(tol)) leaf.form = LeafForm::TurnedBox;
+      }
+    }
   } else if (const auto* h = p.as<HalfSpace>()) {
     if (aligned(h->normal, tol, a)) {
       leaf.form = LeafForm::AlignedHalfSpace;
@@ -111,6 +117,27 @@ std::vector<Field> fieldsOf(DesignedLeaf& leaf) {
         pos(leaf.lo[std::size_t(k)], k, l + "0", b.center[k] - b.halfSize[j], false);
         pos(leaf.hi[std::size_t(k)], k, l + "1", b.center[k] + b.halfSize[j], false);
       }
+      break;
+    }
+    case LeafForm::TurnedBox: {
+      const Box& b = *p.as<Box>();
+      int j = 0;
+      b.axes.row(2).cwiseAbs().maxCoeff(&j);
+      const int u = (j + 1) % 3, w = (j + 2) % 3;  // its own x and y, right-handed about z
+      Vec3 ax = b.axes.col(u);
+      double width = 2 * b.halfSize[u], depth = 2 * b.halfSize[w];
+      if (b.axes(2, j) < 0) std::swap(width, depth), ax = b.axes.col(w);
+      double turn = std::atan2(ax.y(), ax.x()) * kDeg;
+      // The turn in (-45, 45]: a quarter turn swaps the sizes.
+      while (turn > 45.0) turn -= 90.0, std::swap(width, depth);
+      while (turn <= -45.0) turn += 90.0, std::swap(width, depth);
+      pos(leaf.at[0], 0, "x", b.center.x(), false);
+      pos(leaf.at[1], 1, "y", b.center.y(), false);
+      pos(leaf.lo[2], 2, "z0", b.center.z() - b.halfSize[j], false);
+      pos(leaf.hi[2], 2, "z1", b.center.z() + b.halfSize[j], false);
+      f.push_back({&leaf.radius, Category::Step, "width", width});
+      f.push_back({&leaf.radius2, Category::Step, "depth", depth});
+      f.push_back({&leaf.angle, Category::Angle, "turn", turn});
       break;
     }
     case LeafForm::Axial: {
@@ -184,6 +211,13 @@ std::vector<double> fieldSupport(const DesignedLeaf& leaf, const std::vector<Fie
         add(g[k] > 0.0 ? &leaf.lo[std::size_t(k)] : &leaf.hi[std::size_t(k)]);
         break;
       }
+      case LeafForm::TurnedBox:
+        if (std::abs(g.z()) > 0.7) {
+          add(g.z() > 0.0 ? &leaf.lo[2] : &leaf.hi[2]);
+        } else {
+          add(&leaf.at[0]), add(&leaf.at[1]), add(&leaf.radius), add(&leaf.radius2), add(&leaf.angle);
+        }
+        break;
       case LeafForm::Axial:
         if (leaf.type != PrimitiveType::Torus && std::abs(g[a]) > 0.7) {
           add(g[a] > 0.0 ? &leaf.lo[std::size_t(a)] : &leaf.hi[std::size_t(a)]);
@@ -251,13 +285,14 @@ bool validPrimitive(const Primitive& p) {
   return true;
 }
 
-// Rebuilds `node` with each leaf replaced by make(leaf).
+// Rebuilds `node` with each leaf replaced by make(leaf): its primitive and name.
 template <class Make>
 NodePtr rebuilt(const NodePtr& node, const Make& make, std::unordered_map<const Node*, NodePtr>& done) {
   if (const auto it = done.find(node.get()); it != done.end()) return it->second;
   NodePtr out;
   if (node->kind == NodeKind::Primitive) {
-    out = std::make_shared<const Node>(make(node.get()), node->name);
+    auto [primitive, name] = make(node.get());
+    out = std::make_shared<const Node>(std::move(primitive), std::move(name));
   } else {
     std::vector<NodePtr> children;
     for (const NodePtr& c : node->children) children.push_back(rebuilt(c, make, done));
@@ -328,6 +363,15 @@ Primitive DesignedTree::localPrimitive(int index) const {
       p = b;
       break;
     }
+    case LeafForm::TurnedBox: {
+      const double t = v(l.angle) / kDeg;
+      Box b;
+      b.center = Vec3(at.x(), at.y(), 0.5 * (v(l.lo[2]) + v(l.hi[2])));
+      b.axes << std::cos(t), -std::sin(t), 0, std::sin(t), std::cos(t), 0, 0, 0, 1;
+      b.halfSize = 0.5 * Vec3(v(l.radius), v(l.radius2), v(l.hi[2]) - v(l.lo[2]));
+      p = b;
+      break;
+    }
     case LeafForm::Axial: {
       const Vec3 axis = Vec3::Unit(a);
       const double lo = v(l.lo[std::size_t(a)]), hi = v(l.hi[std::size_t(a)]);
@@ -362,7 +406,12 @@ CsgTree DesignedTree::localTree() const {
   if (fitted.empty()) return {};
   std::unordered_map<const Node*, NodePtr> done;
   return CsgTree(rebuilt(
-      fitted.root(), [&](const Node* leaf) { return localPrimitive(leafIndex(leaf)); }, done));
+      fitted.root(),
+      [&](const Node* leaf) {
+        const int i = leafIndex(leaf);
+        return std::make_pair(localPrimitive(i), leaves[std::size_t(i)].name);
+      },
+      done));
 }
 
 CsgTree DesignedTree::tree() const { return treeInWorld(localTree(), frame); }
@@ -374,7 +423,7 @@ class Designer {
  public:
   Designer(const CsgTree& fitted, const PartFrame& frame, std::span<const Vec3> points,
            const DesignOptions& options)
-      : options_(options) {
+      : options_(options), points_(points) {
     d_.fitted = fitted;
     d_.frame = frame;
     local_ = treeInFrame(fitted, frame);
@@ -383,11 +432,14 @@ class Designer {
     diagonal_ = exportExtent(local_).diagonal();
   }
 
-  DesignedTree run() {
+  DesignedTree run(bool patterns = true) {
     makeLeaves();
-    findLeafPatterns();
+    if (patterns) findLeafPatterns();
     makeSlots();
     groupSlots();
+    if (!d_.patterns.empty() && !patternsKeepShape()) {
+      return Designer(d_.fitted, d_.frame, points_, options_).run(false);
+    }
     chooseUnits();
     if (options_.snap) snap();
     mergeEqualSnapped();
@@ -456,8 +508,8 @@ class Designer {
     po.tolerance = options_.patternTolerance * diagonal_;
     for (const auto& group : groups) {
       if (group.size() < 2) continue;
-      std::vector<Primitive> prims;
-      for (int i : group) prims.push_back(d_.leaves[std::size_t(i)].local);
+      std::vector<PatternCandidate> prims;
+      for (int i : group) prims.push_back({d_.leaves[std::size_t(i)].local, looseCaps(i)});
       for (const FoundPattern& f : findPatterns(prims, po)) {
         found_.push_back(f);
         for (int& m : found_.back().members) m = group[std::size_t(m)];
@@ -468,6 +520,32 @@ class Designer {
       return *std::min_element(a.members.begin(), a.members.end()) <
              *std::min_element(b.members.begin(), b.members.end());
     });
+  }
+
+  // The radius an angle of the leaf is read at: half a turned box's width.
+  static double leverOf(const DesignedLeaf& l) {
+    if (l.form != LeafForm::TurnedBox) return 1.0;
+    const Box& b = *l.local.as<Box>();
+    return std::max(b.halfSize.maxCoeff(), 1e-12);
+  }
+
+  // A cylinder that only cuts and whose caps no point holds (it goes
+  // through): its length past the part is free.
+  bool looseCaps(int i) {
+    DesignedLeaf& l = d_.leaves[std::size_t(i)];
+    if (localPoints_.empty() || l.type != PrimitiveType::Cylinder || l.form != LeafForm::Axial ||
+        l.adds || !l.cuts) {
+      return false;
+    }
+    const std::vector<Field> fields = fieldsOf(l);
+    const std::vector<double> n = fieldSupport(l, fields, gradients_[std::size_t(i)]);
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      if ((fields[k].expression == &l.lo[std::size_t(l.axis)] ||
+           fields[k].expression == &l.hi[std::size_t(l.axis)]) && n[k] > 0.0) {
+        return false;
+      }
+    }
+    return true;
   }
 
   int addSlot(Category c, double value, double support, const std::string& name, int leaf,
@@ -500,8 +578,9 @@ class Designer {
       const std::vector<Field> fields = fieldsOf(l);
       const std::vector<double> n = fieldSupport(l, fields, gradients_[i]);
       for (std::size_t k = 0; k < fields.size(); ++k) {
-        *fields[k].expression =
-            Expression::of(addSlot(fields[k].category, fields[k].value, n[k], l.name + "_" + fields[k].name, int(i)));
+        *fields[k].expression = Expression::of(addSlot(fields[k].category, fields[k].value, n[k],
+                                                       l.name + "_" + fields[k].name, int(i),
+                                                       leverOf(l)));
       }
     }
   }
@@ -669,6 +748,7 @@ class Designer {
       }
       fix(l.radius);
       fix(l.radius2);
+      fix(l.angle);
     }
     for (DesignedPattern& p : d_.patterns) {
       for (Expression* e : {&p.centerX, &p.centerY, &p.radius, &p.phase}) fix(*e);
@@ -702,7 +782,7 @@ class Designer {
     };
     for (std::size_t i = 0; i < d_.leaves.size(); ++i) {
       const DesignedLeaf& l = d_.leaves[i];
-      bool u = uses(l.radius) || uses(l.radius2);
+      bool u = uses(l.radius) || uses(l.radius2) || uses(l.angle);
       for (int k = 0; k < 3; ++k) u = u || uses(l.lo[k]) || uses(l.hi[k]) || uses(l.at[k]);
       if (l.pattern >= 0) {
         const DesignedPattern& pat = d_.patterns[std::size_t(l.pattern)];
@@ -713,6 +793,16 @@ class Designer {
       if (u) out.insert(int(i));
     }
     return out;
+  }
+
+  // A pattern shares its members' values (their means): the tree must keep
+  // its shape with them.
+  bool patternsKeepShape() {
+    grid_ = iouGrid(local_, options_.iouResolution);
+    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_);
+    std::vector<int> all(d_.parameters.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = int(i);
+    return check(all) >= 0.0;
   }
 
   // The test a set of values must pass: valid primitives, IoU against the
@@ -764,7 +854,7 @@ class Designer {
   }
 
   void snap() {
-    grid_ = iouGrid(local_, options_.iouResolution);
+    if (grid_.points.empty()) grid_ = iouGrid(local_, options_.iouResolution);
     if (!localPoints_.empty()) baseDistance_ = meanDistance(local_);
     std::vector<std::optional<double>> candidate(d_.parameters.size());
     std::vector<int> all;
@@ -892,6 +982,7 @@ class Designer {
   }
 
   DesignOptions options_;
+  std::span<const Vec3> points_;
   DesignedTree d_;
   CsgTree local_;
   std::vector<Vec3> localPoints_;
@@ -917,7 +1008,31 @@ DesignedTree designTree(const CsgTree& fitted, const PartFrame& frame,
 DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> points,
                         const DesignOptions& options) {
   if (fitted.empty()) throw std::invalid_argument("designTree: empty tree");
-  return designTree(fitted, partFrame(fitted, points, options.frame), points, options);
+  PartFrame frame = partFrame(fitted, points, options.frame);
+  DesignedTree d = designTree(fitted, frame, points, options);
+  if (!frame.spinFree) return d;
+  // A turned part: x through the first member of a bolt circle about the
+  // main axis, so that a turned copy of the part gives the same values.
+  const double tol = options.patternTolerance * exportExtent(fitted).diagonal();
+  for (const DesignedPattern& p : d.patterns) {
+    const auto fittedOf = [&](const Expression& e) {
+      double v = 0.0;
+      for (const auto& [c, i] : e.terms) v += c * d.parameters[std::size_t(i)].fitted;
+      return v;
+    };
+    if (p.kind != PatternKind::Circular || std::abs(fittedOf(p.centerX)) > tol ||
+        std::abs(fittedOf(p.centerY)) > tol) {
+      continue;
+    }
+    const double phase = fittedOf(p.phase) / kDeg;
+    if (std::abs(phase) < 1e-12) return d;
+    Mat3 spin = Mat3::Identity();
+    spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
+    frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);
+    frame.spinFree = false;
+    return designTree(fitted, frame, points, options);
+  }
+  return d;
 }
 
 }  // namespace csgvox

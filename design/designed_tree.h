@@ -52,6 +52,7 @@ struct DesignParameter {
 /// How a designed leaf is written.
 enum class LeafForm {
   AlignedBox,        ///< a box along the frame's axes: lo and hi faces per axis
+  TurnedBox,         ///< a box with one axis along frame z, turned by `angle` about it
   Axial,             ///< a cylinder, cone or torus along frame axis `axis`
   Sphere,            ///< centre and radius
   AlignedHalfSpace,  ///< a plane across frame axis `axis`: keeps x[axis] <= hi (or >= lo)
@@ -63,7 +64,8 @@ enum class LeafForm {
 /// (the axis line), lo[axis] and hi[axis] (caps; a torus's centre is
 /// at[axis]), radius (cone: at lo) and radius2 (cone: at hi; torus: minor);
 /// Sphere: at[], radius; AlignedHalfSpace: hi[axis] (normal +axis) or
-/// lo[axis] (flipped).
+/// lo[axis] (flipped); TurnedBox: at[0], at[1] (centre), lo[2], hi[2]
+/// (faces), radius and radius2 (its sizes along its own x and y), angle.
 struct DesignedLeaf {
   const Node* node = nullptr;     ///< the leaf of the fitted tree
   std::string name;               ///< unique identifier from its role, e.g. "hole_2"
@@ -79,6 +81,7 @@ struct DesignedLeaf {
   std::array<Expression, 3> at;   ///< centre coordinates, per frame axis
   Expression radius;              ///< radius (cone: at lo; torus: major)
   Expression radius2;             ///< cone: radius at hi; torus: minor radius
+  Expression angle;               ///< TurnedBox: its turn about z from the frame's x, degrees
   Primitive local;                ///< Free: the primitive in frame coordinates
   int pattern = -1;               ///< index of its pattern, or -1
   int member = 0;                 ///< its index in the pattern (0: the one written)
@@ -140,7 +143,8 @@ struct DesignedTree {
   double meanDistanceDesigned = 0.0;       ///< points' mean |f| to the designed tree
 
   /// The designed tree in world coordinates (the fitted tree's structure,
-  /// every leaf realised from the parameters' values).
+  /// every leaf realised from the parameters' values and named as its
+  /// designed leaf).
   CsgTree tree() const;
   /// The designed tree in frame coordinates.
   CsgTree localTree() const;

@@ -14,7 +14,7 @@ double Expression::value(std::span<const DesignParameter> parameters) const {
 }
 
 std::string Expression::text(std::span<const DesignParameter> parameters) const {
-  return text([&](int p) { return parameters[std::size_t(p)].name; });
+  return textWith([&](int p) { return parameters[std::size_t(p)].name; });
 }
 
 std::string expressionText(const std::vector<std::pair<double, int>>& terms,

@@ -26,7 +26,7 @@ struct Expression {
   /// Its text with each parameter's name passed through `nameOf` (e.g. a
   /// spreadsheet alias "Parameters.hub_z1").
   template <class NameOf>
-  std::string text(const NameOf& nameOf) const;
+  std::string textWith(const NameOf& nameOf) const;
 };
 
 /// The text of the sum of `terms`, names from `names`.
@@ -34,7 +34,7 @@ std::string expressionText(const std::vector<std::pair<double, int>>& terms,
                            const std::vector<std::string>& names);
 
 template <class NameOf>
-std::string Expression::text(const NameOf& nameOf) const {
+std::string Expression::textWith(const NameOf& nameOf) const {
   std::vector<std::string> names;
   std::vector<std::pair<double, int>> renumbered;
   for (const auto& [c, p] : terms) {

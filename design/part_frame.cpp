@@ -138,9 +138,9 @@ Vec3 solidCentroid(const CsgTree& tree, const Aabb& extent) {
   return count > 0.0 ? Vec3(sum / count) : extent.center();
 }
 
-// The signed permutation nearest `r` when every column lies within `tol`
-// radians of a world axis; else `r`.
-Mat3 snappedToWorld(const Mat3& r, double tol) {
+}  // namespace
+
+Mat3 nearestWorldAxes(const Mat3& r, double tol) {
   Mat3 out = Mat3::Zero();
   for (int c = 0; c < 3; ++c) {
     int k = 0;
@@ -150,8 +150,6 @@ Mat3 snappedToWorld(const Mat3& r, double tol) {
   }
   return std::abs(out.determinant() - 1.0) < 1e-12 ? out : r;
 }
-
-}  // namespace
 
 Vec3 PartFrame::eulerDegrees() const {
   const Mat3& r = rotation;
@@ -196,7 +194,8 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
       break;
     }
   }
-  if (x.isZero()) {
+  const bool spinFree = x.isZero();
+  if (spinFree) {
     int k = 0;
     z.cwiseAbs().minCoeff(&k);
     const Vec3 w = Vec3::Unit(k);
@@ -219,10 +218,11 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
   lowSide(z);
   lowSide(x);
   PartFrame frame;
+  frame.spinFree = spinFree;
   frame.rotation.col(0) = x;
   frame.rotation.col(1) = z.cross(x).normalized();
   frame.rotation.col(2) = z;
-  frame.rotation = snappedToWorld(frame.rotation, options.worldTolerance);
+  frame.rotation = nearestWorldAxes(frame.rotation, options.worldTolerance);
 
   // Origin: on the heaviest axis parallel to z (by its primitives' areas), at
   // the bottom of the part; else the low corner of the part's bounds.

@@ -15,6 +15,7 @@ namespace csgvox {
 struct PartFrame {
   Mat3 rotation = Mat3::Identity();  ///< columns: the frame's x, y, z axes in world coordinates
   Vec3 origin = Vec3::Zero();        ///< the frame's origin in world coordinates
+  bool spinFree = false;  ///< no face of the part fixes x (a turned part): any turn about z is as good
 
   /// World coordinates of a point given in the frame.
   Vec3 toWorld(const Vec3& local) const { return rotation * local + origin; }
@@ -44,6 +45,11 @@ struct FrameOptions {
 /// @throw std::invalid_argument for an empty tree.
 PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points = {},
                     const FrameOptions& options = {});
+
+/// The signed permutation of the world axes nearest `rotation` (a
+/// right-handed one) when each of its columns lies within `tolerance`
+/// radians of a world axis; else `rotation` itself.
+Mat3 nearestWorldAxes(const Mat3& rotation, double tolerance);
 
 /// `primitive` moved by world = rotation · p + translation.
 Primitive transformedPrimitive(const Primitive& primitive, const Mat3& rotation,

@@ -13,7 +13,7 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 
 // The primitive moved to the origin with its axis's sign fixed, so that
 // equal shapes compare equal.
-Primitive shapeKey(const Primitive& p) {
+Primitive shapeKey(const Primitive& p, bool loose) {
   const auto positive = [](const Vec3& a) {
     for (int i = 0; i < 3; ++i) {
       if (std::abs(a[i]) > 1e-9) return a[i] > 0.0;
@@ -39,6 +39,9 @@ Primitive shapeKey(const Primitive& p) {
         } else {
           s.center = Vec3::Zero();
           if (!positive(s.axis)) s.axis = -s.axis;
+          if constexpr (std::is_same_v<T, Cylinder>) {
+            if (loose) s.height = 1.0;
+          }
         }
         return s;
       },
@@ -54,20 +57,21 @@ bool alongZ(const Primitive& p, double tol) {
   return std::abs(axis.x()) <= tol && std::abs(axis.y()) <= tol;
 }
 
-bool circular(const std::vector<int>& group, std::span<const Primitive> prims, double tol,
+bool circular(const std::vector<int>& group, std::span<const PatternCandidate> prims,
+              const std::vector<Vec3>& pos, double tol,
               FoundPattern& out) {
   const int n = int(group.size());
   if (n < 3) return false;
   Vec3 m = Vec3::Zero();
   for (int i : group) {
-    if (!alongZ(prims[std::size_t(i)], tol / 100)) return false;
-    m += primitiveCenter(prims[std::size_t(i)]);
+    if (!alongZ(prims[std::size_t(i)].primitive, tol / 100)) return false;
+    m += pos[std::size_t(i)];
   }
   m /= n;
   std::vector<std::pair<double, int>> angles;
   double radius = 0.0;
   for (int i : group) {
-    const Vec3 d = primitiveCenter(prims[std::size_t(i)]) - m;
+    const Vec3 d = pos[std::size_t(i)] - m;
     if (std::abs(d.z()) > tol) return false;
     radius += std::hypot(d.x(), d.y()) / n;
     double a = std::atan2(d.y(), d.x()) * kDeg;
@@ -79,7 +83,7 @@ bool circular(const std::vector<int>& group, std::span<const Primitive> prims, d
   const double step = 360.0 / n;
   std::sort(angles.begin(), angles.end());
   for (int k = 0; k < n; ++k) {
-    const Vec3 d = primitiveCenter(prims[std::size_t(angles[k].second)]) - m;
+    const Vec3 d = pos[std::size_t(angles[k].second)] - m;
     if (std::abs(std::hypot(d.x(), d.y()) - radius) > tol) return false;
     if (std::abs(angles[k].first - angles[0].first - k * step) > angleTol) return false;
   }
@@ -131,14 +135,15 @@ bool evenlySpaced(const std::vector<double>& v, double tol) {
   return true;
 }
 
-bool lattice(const std::vector<int>& group, std::span<const Primitive> prims, double tol,
+bool lattice(const std::vector<int>& group, std::span<const PatternCandidate>,
+              const std::vector<Vec3>& pos, double tol,
              FoundPattern& out) {
   const int n = int(group.size());
   if (n < 4) return false;
   std::array<std::vector<double>, 3> lv;
   for (int a = 0; a < 3; ++a) {
     std::vector<double> v;
-    for (int i : group) v.push_back(primitiveCenter(prims[std::size_t(i)])[a]);
+    for (int i : group) v.push_back(pos[std::size_t(i)][a]);
     lv[a] = levels(v, tol);
     if (!evenlySpaced(lv[a], tol)) return false;
   }
@@ -151,7 +156,7 @@ bool lattice(const std::vector<int>& group, std::span<const Primitive> prims, do
   const int na = int(lv[a].size()), nb = int(lv[b].size());
   std::vector<int> members(std::size_t(n), -1);
   for (int i : group) {
-    const Vec3 c = primitiveCenter(prims[std::size_t(i)]);
+    const Vec3 c = pos[std::size_t(i)];
     int ia = -1, ib = -1;
     for (int k = 0; k < na; ++k) if (std::abs(c[a] - lv[a][k]) <= tol) ia = k;
     for (int k = 0; k < nb; ++k) if (std::abs(c[b] - lv[b][k]) <= tol) ib = k;
@@ -169,7 +174,8 @@ bool lattice(const std::vector<int>& group, std::span<const Primitive> prims, do
   return true;
 }
 
-bool row(const std::vector<int>& group, std::span<const Primitive> prims, double tol,
+bool row(const std::vector<int>& group, std::span<const PatternCandidate>,
+              const std::vector<Vec3>& pos, double tol,
          FoundPattern& out) {
   const int n = int(group.size());
   if (n < 2) return false;
@@ -178,8 +184,8 @@ bool row(const std::vector<int>& group, std::span<const Primitive> prims, double
   double far = -1.0;
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j) {
-      const double d = (primitiveCenter(prims[std::size_t(group[std::size_t(j)])]) -
-                        primitiveCenter(prims[std::size_t(group[std::size_t(i)])])).norm();
+      const double d = (pos[std::size_t(group[std::size_t(j)])] -
+                        pos[std::size_t(group[std::size_t(i)])]).norm();
       if (d > far + tol) {
         far = d;
         p = i;
@@ -187,8 +193,8 @@ bool row(const std::vector<int>& group, std::span<const Primitive> prims, double
       }
     }
   if (far <= tol) return false;
-  const Vec3 c0 = primitiveCenter(prims[std::size_t(group[std::size_t(p)])]);
-  Vec3 dir = primitiveCenter(prims[std::size_t(group[std::size_t(q)])]) - c0;
+  const Vec3 c0 = pos[std::size_t(group[std::size_t(p)])];
+  Vec3 dir = pos[std::size_t(group[std::size_t(q)])] - c0;
   // Point the row so that it runs up the frame's axes (deterministic).
   for (int a = 0; a < 3; ++a) {
     if (std::abs(dir[a]) > tol) {
@@ -197,13 +203,13 @@ bool row(const std::vector<int>& group, std::span<const Primitive> prims, double
     }
   }
   std::vector<std::pair<double, int>> order;
-  for (int i : group) order.emplace_back(primitiveCenter(prims[std::size_t(i)]).dot(dir), i);
+  for (int i : group) order.emplace_back(pos[std::size_t(i)].dot(dir), i);
   std::sort(order.begin(), order.end());
-  const Vec3 first = primitiveCenter(prims[std::size_t(order.front().second)]);
-  const Vec3 step = (primitiveCenter(prims[std::size_t(order.back().second)]) - first) / (n - 1);
+  const Vec3 first = pos[std::size_t(order.front().second)];
+  const Vec3 step = (pos[std::size_t(order.back().second)] - first) / (n - 1);
   out.members.clear();
   for (int k = 0; k < n; ++k) {
-    const Vec3 c = primitiveCenter(prims[std::size_t(order[std::size_t(k)].second)]);
+    const Vec3 c = pos[std::size_t(order[std::size_t(k)].second)];
     if ((c - first - k * step).norm() > tol) return false;
     out.members.push_back(order[std::size_t(k)].second);
   }
@@ -227,15 +233,25 @@ Vec3 primitiveCenter(const Primitive& p) {
       p.shape());
 }
 
-std::vector<FoundPattern> findPatterns(std::span<const Primitive> primitives,
+std::vector<FoundPattern> findPatterns(std::span<const PatternCandidate> primitives,
                                        const PatternOptions& options) {
   const double tol = options.tolerance;
+  // Positions compared: the centres, less the axial part of a loose cylinder's
+  // (its caps are free) when every loose one shares the direction.
+  std::vector<Vec3> pos;
+  for (const PatternCandidate& c : primitives) {
+    Vec3 p = primitiveCenter(c.primitive);
+    if (const auto* cyl = c.primitive.as<Cylinder>(); cyl && c.looseLength) {
+      p -= p.dot(cyl->axis) * cyl->axis;
+    }
+    pos.push_back(p);
+  }
   // Groups of equal shapes, in input order.
   std::vector<Primitive> keys;
   std::vector<std::vector<int>> groups;
   for (std::size_t i = 0; i < primitives.size(); ++i) {
-    if (!primitives[i].isBounded()) continue;
-    const Primitive key = shapeKey(primitives[i]);
+    if (!primitives[i].primitive.isBounded()) continue;
+    const Primitive key = shapeKey(primitives[i].primitive, primitives[i].looseLength);
     std::size_t g = 0;
     while (g < keys.size() && !keys[g].approxEqual(key, tol)) ++g;
     if (g == keys.size()) {
@@ -248,8 +264,12 @@ std::vector<FoundPattern> findPatterns(std::span<const Primitive> primitives,
   for (const auto& group : groups) {
     if (group.size() < 2) continue;
     FoundPattern p;
-    if (circular(group, primitives, tol, p) || lattice(group, primitives, tol, p) ||
-        row(group, primitives, tol, p)) {
+    // Loose and firm lengths do not mix in one pattern.
+    bool mixed = false;
+    for (int i : group) mixed = mixed || primitives[std::size_t(i)].looseLength != primitives[std::size_t(group.front())].looseLength;
+    if (mixed) continue;
+    if (circular(group, primitives, pos, tol, p) || lattice(group, primitives, pos, tol, p) ||
+        row(group, primitives, pos, tol, p)) {
       found.push_back(p);
     }
   }

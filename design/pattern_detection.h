@@ -32,12 +32,19 @@ struct PatternOptions {
   double tolerance = 1e-3;  ///< sizes, positions and steps this close are equal, scan units
 };
 
+/// One primitive as findPatterns() sees it.
+struct PatternCandidate {
+  Primitive primitive;      ///< in frame coordinates
+  bool looseLength = false; ///< a cylinder whose caps nothing holds (a cutter past the part):
+                            ///< its height and its position along its axis are not compared
+};
+
 /// Patterns among `primitives` (frame coordinates): groups of primitives
-/// equal but for their position, whose positions form a circle about a line
+/// equal but for their position (and for loose lengths), whose positions form a circle about a line
 /// parallel to z (cylinders, cones and tori along z, spheres), a lattice
 /// along the frame's axes or a row. Each primitive is in one pattern at
 /// most; groups of other layouts give none.
-std::vector<FoundPattern> findPatterns(std::span<const Primitive> primitives,
+std::vector<FoundPattern> findPatterns(std::span<const PatternCandidate> candidates,
                                        const PatternOptions& options = {});
 
 /// The position findPatterns() moves: a primitive's centre (a half-space has none: 0).
