@@ -22,6 +22,10 @@ namespace {
 constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const char* const kAxisLetter[3] = {"x", "y", "z"};
+// A point lies on a cap (not on the side) of a cylinder or cone when its
+// gradient is this close to the axis: caps' gradients are the axis itself,
+// sides' are across it (a cone's tilted by its half-angle).
+constexpr double kCapCosine = 0.99;
 
 // What a value measures, for grouping: values of one category and close
 // values are one parameter.
@@ -212,14 +216,14 @@ std::vector<double> fieldSupport(const DesignedLeaf& leaf, const std::vector<Fie
         break;
       }
       case LeafForm::TurnedBox:
-        if (std::abs(g.z()) > 0.7) {
+        if (std::abs(g.z()) > kCapCosine) {
           add(g.z() > 0.0 ? &leaf.lo[2] : &leaf.hi[2]);
         } else {
           add(&leaf.at[0]), add(&leaf.at[1]), add(&leaf.radius), add(&leaf.radius2), add(&leaf.angle);
         }
         break;
       case LeafForm::Axial:
-        if (leaf.type != PrimitiveType::Torus && std::abs(g[a]) > 0.7) {
+        if (leaf.type != PrimitiveType::Torus && std::abs(g[a]) > kCapCosine) {
           add(g[a] > 0.0 ? &leaf.lo[std::size_t(a)] : &leaf.hi[std::size_t(a)]);
         } else if (leaf.type == PrimitiveType::Torus) {
           addAll();
@@ -236,6 +240,41 @@ std::vector<double> fieldSupport(const DesignedLeaf& leaf, const std::vector<Fie
     }
   }
   return n;
+}
+
+// A cone's cap that no point holds can slide along the cone: moved to the
+// nearest whole unit along the axis (its radius following the slope), its
+// numbers become the ones the cone was drawn with when it was drawn there.
+void slideFreeConeCaps(const DesignedLeaf& leaf, std::vector<Field>& fields,
+                       const std::vector<double>& support) {
+  if (leaf.form != LeafForm::Axial || leaf.type != PrimitiveType::Cone) return;
+  const auto find = [&](const Expression* e) {
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      if (fields[k].expression == e) return k;
+    }
+    return fields.size();
+  };
+  const std::size_t lo = find(&leaf.lo[std::size_t(leaf.axis)]),
+                    hi = find(&leaf.hi[std::size_t(leaf.axis)]), r0 = find(&leaf.radius),
+                    r1 = find(&leaf.radius2);
+  if (hi >= fields.size() || r1 >= fields.size()) return;
+  const double z0 = fields[lo].value, z1 = fields[hi].value;
+  const double slope = (fields[r1].value - fields[r0].value) / (z1 - z0);
+  const auto slide = [&](std::size_t z, std::size_t r) {
+    if (support[z] > 0.0) return;
+    const double to = std::round(fields[z].value);
+    const double radius = fields[r].value + slope * (to - fields[z].value);
+    if (!(radius >= 0.0)) return;
+    fields[z].value = to;
+    fields[r].value = radius;
+  };
+  slide(lo, r0);
+  slide(hi, r1);
+  if (!(fields[hi].value > fields[lo].value)) {  // undo: the cone would vanish
+    fields[lo].value = z0;
+    fields[hi].value = z1;
+    fields[r0].value = fields[r1].value - slope * (z1 - z0);
+  }
 }
 
 std::string plural(const std::string& role, int n) {
@@ -432,12 +471,15 @@ class Designer {
     diagonal_ = exportExtent(local_).diagonal();
   }
 
-  DesignedTree run(bool patterns = true) {
+  // `reshape`: find patterns and slide free cone caps (kept only when the
+  // tree keeps its shape with them).
+  DesignedTree run(bool reshape = true) {
+    slide_ = reshape;
     makeLeaves();
-    if (patterns) findLeafPatterns();
+    if (reshape) findLeafPatterns();
     makeSlots();
     groupSlots();
-    if (!d_.patterns.empty() && !patternsKeepShape()) {
+    if (reshape && !keepsShape()) {
       return Designer(d_.fitted, d_.frame, points_, options_).run(false);
     }
     chooseUnits();
@@ -575,8 +617,9 @@ class Designer {
         continue;
       }
       DesignedLeaf& l = d_.leaves[i];
-      const std::vector<Field> fields = fieldsOf(l);
+      std::vector<Field> fields = fieldsOf(l);
       const std::vector<double> n = fieldSupport(l, fields, gradients_[i]);
+      if (!localPoints_.empty() && slide_) slideFreeConeCaps(l, fields, n);
       for (std::size_t k = 0; k < fields.size(); ++k) {
         *fields[k].expression = Expression::of(addSlot(fields[k].category, fields[k].value, n[k],
                                                        l.name + "_" + fields[k].name, int(i),
@@ -607,6 +650,9 @@ class Designer {
     for (int m : f.members) {
       fields.push_back(fieldsOf(d_.leaves[std::size_t(m)]));
       support.push_back(fieldSupport(d_.leaves[std::size_t(m)], fields.back(), gradients_[std::size_t(m)]));
+      if (!localPoints_.empty() && slide_) {
+        slideFreeConeCaps(d_.leaves[std::size_t(m)], fields.back(), support.back());
+      }
     }
     double crossSupport = 0.0;
     for (std::size_t k = 0; k < fields.front().size(); ++k) {
@@ -795,9 +841,9 @@ class Designer {
     return out;
   }
 
-  // A pattern shares its members' values (their means): the tree must keep
-  // its shape with them.
-  bool patternsKeepShape() {
+  // A pattern shares its members' values (their means), a cone's free cap
+  // slides: the tree must keep its shape with them.
+  bool keepsShape() {
     grid_ = iouGrid(local_, options_.iouResolution);
     if (!localPoints_.empty()) baseDistance_ = meanDistance(local_);
     std::vector<int> all(d_.parameters.size());
@@ -848,7 +894,8 @@ class Designer {
       double mean = 0.0;
       for (double x : g) mean += std::abs(x);
       mean /= double(g.size());
-      if (mean > baseDistance_ + options_.fitnessSlack * d_.noise) return -1.0;
+      const double noise = std::max(d_.noise, options_.minNoise * diagonal_);
+      if (mean > baseDistance_ + options_.fitnessSlack * noise) return -1.0;
     }
     return iou;
   }
@@ -982,6 +1029,7 @@ class Designer {
   }
 
   DesignOptions options_;
+  bool slide_ = true;
   std::span<const Vec3> points_;
   DesignedTree d_;
   CsgTree local_;

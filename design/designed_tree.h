@@ -124,6 +124,9 @@ struct DesignOptions {
   double minIou = 0.999;           ///< least voxel IoU of the snapped tree against the fitted one
   double fitnessSlack = 1.0;       ///< the points' mean distance may grow by this many noise
                                    ///< deviations
+  double minNoise = 1e-4;          ///< least noise deviation that test allows, fraction of the
+                                   ///< part's diagonal (no scanner measures finer; a sampled
+                                   ///< mesh's points lie on the surface to the last bits)
   int iouResolution = 48;          ///< IoU grid cells along the longest side of the part
   bool snap = true;                ///< false: parameters keep their fitted values
   FrameOptions frame;              ///< how the frame is chosen
