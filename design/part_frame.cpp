@@ -201,22 +201,20 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
     const Vec3 w = Vec3::Unit(k);
     x = (w - w.dot(z) * z).normalized();
   }
-  // Signs: the solid's centroid on the low side of the extent along z and x.
-  const Aabb extent = exportExtent(tree);
-  const Vec3 centroid = solidCentroid(tree, extent);
-  const auto lowSide = [&](Vec3& axis) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int i = 0; i < 8; ++i) {
-      const Vec3 corner((i & 1) ? extent.max.x() : extent.min.x(),
-                        (i & 2) ? extent.max.y() : extent.min.y(),
-                        (i & 4) ? extent.max.z() : extent.min.z());
-      lo = std::min(lo, axis.dot(corner));
-      hi = std::max(hi, axis.dot(corner));
-    }
-    if (axis.dot(centroid) > 0.5 * (lo + hi) + 1e-3 * (hi - lo)) axis = -axis;
-  };
-  lowSide(z);
-  lowSide(x);
+  // Signs: the solid's centroid on the low side of its extent along z and x,
+  // both measured in the frame (so that a turned copy decides alike).
+  Mat3 r;
+  r.col(0) = x;
+  r.col(1) = z.cross(x).normalized();
+  r.col(2) = z;
+  {
+    const CsgTree inFrame = transformedTree(tree, r.transpose(), Vec3::Zero());
+    const Aabb e = exportExtent(inFrame);
+    const Vec3 c = solidCentroid(inFrame, e);
+    const auto high = [&](int k) { return c[k] > e.center()[k] + 1e-3 * e.size()[k]; };
+    if (high(2)) z = -z;
+    if (high(0)) x = -x;
+  }
   PartFrame frame;
   frame.spinFree = spinFree;
   frame.rotation.col(0) = x;
