@@ -88,6 +88,8 @@ void classify(DesignedLeaf& leaf, const Primitive& p, double tol) {
       leaf.form = LeafForm::AlignedHalfSpace;
       leaf.axis = a;
       leaf.flipped = h->normal[a] < 0.0;
+    } else {
+      leaf.form = LeafForm::TiltedHalfSpace;
     }
   } else if (p.type() == PrimitiveType::Sphere) {
     leaf.form = LeafForm::Sphere;
@@ -185,6 +187,15 @@ std::vector<Field> fieldsOf(DesignedLeaf& leaf) {
       } else {
         pos(leaf.hi[std::size_t(a)], a, l + "1", h.offset, false);
       }
+      break;
+    }
+    case LeafForm::TiltedHalfSpace: {
+      const auto& h = *p.as<HalfSpace>();
+      const double tilt = std::acos(std::clamp(h.normal.z(), -1.0, 1.0)) * kDeg;
+      const double turn = std::atan2(h.normal.y(), h.normal.x()) * kDeg;
+      f.push_back({&leaf.radius, Category::Step, "offset", h.offset});
+      f.push_back({&leaf.angle, Category::Angle, "tilt", tilt});
+      f.push_back({&leaf.angle2, Category::Angle, "turn", turn});
       break;
     }
     case LeafForm::Free:
@@ -434,6 +445,12 @@ Primitive DesignedTree::localPrimitive(int index) const {
       p = l.flipped ? HalfSpace{-Vec3::Unit(a), -v(l.lo[std::size_t(a)])}
                     : HalfSpace{Vec3::Unit(a), v(l.hi[std::size_t(a)])};
       break;
+    case LeafForm::TiltedHalfSpace: {
+      const double tilt = v(l.angle) / kDeg, turn = v(l.angle2) / kDeg;
+      const Vec3 n(std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), std::cos(tilt));
+      p = HalfSpace{n.normalized(), v(l.radius)};
+      break;
+    }
     case LeafForm::Free:
       break;
   }
@@ -565,7 +582,8 @@ class Designer {
   }
 
   // The radius an angle of the leaf is read at: half a turned box's width.
-  static double leverOf(const DesignedLeaf& l) {
+  double leverOf(const DesignedLeaf& l) const {
+    if (l.form == LeafForm::TiltedHalfSpace) return 0.5 * diagonal_;
     if (l.form != LeafForm::TurnedBox) return 1.0;
     const Box& b = *l.local.as<Box>();
     return std::max(b.halfSize.maxCoeff(), 1e-12);
@@ -795,6 +813,7 @@ class Designer {
       fix(l.radius);
       fix(l.radius2);
       fix(l.angle);
+      fix(l.angle2);
     }
     for (DesignedPattern& p : d_.patterns) {
       for (Expression* e : {&p.centerX, &p.centerY, &p.radius, &p.phase}) fix(*e);
@@ -828,7 +847,7 @@ class Designer {
     };
     for (std::size_t i = 0; i < d_.leaves.size(); ++i) {
       const DesignedLeaf& l = d_.leaves[i];
-      bool u = uses(l.radius) || uses(l.radius2) || uses(l.angle);
+      bool u = uses(l.radius) || uses(l.radius2) || uses(l.angle) || uses(l.angle2);
       for (int k = 0; k < 3; ++k) u = u || uses(l.lo[k]) || uses(l.hi[k]) || uses(l.at[k]);
       if (l.pattern >= 0) {
         const DesignedPattern& pat = d_.patterns[std::size_t(l.pattern)];

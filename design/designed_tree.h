@@ -56,6 +56,8 @@ enum class LeafForm {
   Axial,             ///< a cylinder, cone or torus along frame axis `axis`
   Sphere,            ///< centre and radius
   AlignedHalfSpace,  ///< a plane across frame axis `axis`: keeps x[axis] <= hi (or >= lo)
+  TiltedHalfSpace,   ///< an oblique plane: normal tilted by `angle` from z, turned by `angle2`
+                     ///< about z; keeps normal·x <= radius (its offset)
   Free               ///< oblique to the frame: written as fitted (frame coordinates)
 };
 
@@ -81,7 +83,9 @@ struct DesignedLeaf {
   std::array<Expression, 3> at;   ///< centre coordinates, per frame axis
   Expression radius;              ///< radius (cone: at lo; torus: major)
   Expression radius2;             ///< cone: radius at hi; torus: minor radius
-  Expression angle;               ///< TurnedBox: its turn about z from the frame's x, degrees
+  Expression angle;               ///< TurnedBox: its turn about z from the frame's x; TiltedHalfSpace:
+                                  ///< its normal's angle from z (degrees)
+  Expression angle2;              ///< TiltedHalfSpace: its normal's turn about z from x (degrees)
   Primitive local;                ///< Free: the primitive in frame coordinates
   int pattern = -1;               ///< index of its pattern, or -1
   int member = 0;                 ///< its index in the pattern (0: the one written)

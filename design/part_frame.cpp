@@ -46,7 +46,9 @@ bool isAxial(const Primitive& p) {
 
 // Areas of the faces each direction of directionsOf() orients.
 std::vector<double> faceAreas(const Primitive& p, double diagonal) {
-  if (p.as<HalfSpace>()) return {diagonal * diagonal};
+  // A plane's face within the part: at most about a square of half the
+  // part's diagonal.
+  if (p.as<HalfSpace>()) return {0.25 * diagonal * diagonal};
   if (const auto* b = p.as<Box>()) {
     const Vec3 s = 2.0 * b->halfSize;
     return {2 * s.y() * s.z(), 2 * s.x() * s.z(), 2 * s.x() * s.y()};

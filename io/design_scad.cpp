@@ -137,6 +137,8 @@ struct DesignWriter {
                                grown(l.lo[std::size_t(l.axis)], "-") + ");"
                          : "block_below(" + std::to_string(l.axis) + ", " +
                                grown(l.hi[std::size_t(l.axis)], "+") + ");";
+      case LeafForm::TiltedHalfSpace:
+        return "plane_below(" + e(l.angle) + ", " + e(l.angle2) + ", " + grown(l.radius, "+") + ");";
       case LeafForm::Free:
         break;
     }
@@ -274,7 +276,10 @@ void writeDesignedScad(std::ostream& out, const DesignedTree& d, const ScadOptio
          "part_center[k] - big / 2]) cube(big);\n"
       << "module block_above(axis, at) translate([for (k = [0 : 2]) k == axis ? at : "
          "part_center[k] - big / 2]) cube(big);\n"
-      << "module everything() translate(part_center - [big, big, big] / 2) cube(big);\n\n";
+      << "module everything() translate(part_center - [big, big, big] / 2) cube(big);\n"
+      << "// The half-space normal·x <= at, its normal tilted from z, then turned about z (degrees).\n"
+      << "module plane_below(tilt, turn, at) rotate([0, 0, turn]) rotate([0, tilt, 0]) "
+         "translate([-big, -big, at - 2 * big]) cube(2 * big);\n\n";
   out << kBodyMarker << " (g: how much a cutter grows)\n";
   for (std::size_t i = 0; i < d.leaves.size(); ++i) {
     const DesignedLeaf& l = d.leaves[i];
