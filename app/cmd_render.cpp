@@ -12,6 +12,7 @@
 #include "io/design_json.h"
 #include "io/design_scad.h"
 #include "io/errors.h"
+#include "io/freecad_macro.h"
 #include "io/file_util.h"
 #include "io/mesh_files.h"
 #include "io/png_file.h"
@@ -54,7 +55,8 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
   app.add_option("-o,--output", opt->output,
                  "Output file; its extension picks the format: .ply .stl .obj (mesh), "
                  ".scad (OpenSCAD), .txt (expression), .json (tree), .step (exact B-rep), "
-                 ".csg (OpenSCAD CSG, for FreeCAD), .png (preview picture)")
+                 ".csg (OpenSCAD CSG, for FreeCAD), .FCMacro (parametric FreeCAD model), .png (preview "
+                 "picture)")
       ->required();
   app.add_option("--res", opt->resolution,
                  "Mesh resolution: grid cells along the longest side of the part")
@@ -103,6 +105,8 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
       } else {
         writeDesignedTreeJson(std::filesystem::path(opt->output), designedFromFile(tree, opt->tree));
       }
+    } else if (ext == "fcmacro") {
+      writeFreecadMacro(std::filesystem::path(opt->output), designedFromFile(tree, opt->tree));
     } else if (ext == "csg") {
       writeCsg(std::filesystem::path(opt->output), tree);
     } else if (ext == "step" || ext == "stp") {
@@ -127,7 +131,7 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
     } else {
       throw IoError(opt->output +
                     ": unsupported output format (use .ply, .stl, .obj, .scad, .txt, .json, .csg, "
-                    ".step or .png)");
+                    ".step, .FCMacro or .png)");
     }
     console.info("wrote " + opt->output);
     return 0;

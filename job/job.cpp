@@ -8,6 +8,7 @@
 #include "io/csg_writer.h"
 #include "io/design_json.h"
 #include "io/design_scad.h"
+#include "io/freecad_macro.h"
 #include "io/mesh_files.h"
 #include "io/png_file.h"
 #include "io/report.h"
@@ -20,9 +21,9 @@
 namespace csgvox {
 
 const std::vector<std::string>& jobFiles() {
-  static const std::vector<std::string> files = {"tree.json", "tree.scad",  "tree.txt",
-                                                 "tree.csg",  "tree.step",  "preview.png",
-                                                 "mesh.ply",  "report.json"};
+  static const std::vector<std::string> files = {
+      "tree.json", "tree.scad",   "tree.txt", "tree.csg",   "tree.step",
+      "tree.FCMacro", "preview.png", "mesh.ply", "report.json"};
   return files;
 }
 
@@ -104,7 +105,9 @@ void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
     writeDesignedTreeJson(output.path("tree.json"), *design);
     writeDesignedScad(output.path("tree.scad"), *design);
     writeTreeText(output.path("tree.txt"), *design);
+    writeFreecadMacro(output.path("tree.FCMacro"), *design);
   } else {
+    output.skip("tree.FCMacro");
     writeTreeJson(output.path("tree.json"), tree);
     writeScad(output.path("tree.scad"), tree);
     writeTreeText(output.path("tree.txt"), tree);

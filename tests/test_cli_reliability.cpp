@@ -20,8 +20,9 @@
 namespace csgvox {
 namespace {
 
-const char* const kMainOutputs[] = {"tree.json",   "tree.scad", "tree.txt",  "mesh.ply",
-                                    "report.json", "tree.csg",  "tree.step", "preview.png"};
+const char* const kMainOutputs[] = {"tree.json", "tree.scad",    "tree.txt",
+                                    "mesh.ply",  "report.json",  "tree.csg",
+                                    "tree.step", "tree.FCMacro", "preview.png"};
 constexpr int kMainOutputCount = int(std::size(kMainOutputs));
 
 // The main job's outputs, and `extra`.
