@@ -647,6 +647,17 @@ class Designer {
   }
 
   void makePatternSlots(const FoundPattern& f) {
+    // Members named in the pattern's order (the names they had, sorted).
+    {
+      std::vector<std::string> names;
+      for (int m : f.members) names.push_back(d_.leaves[std::size_t(m)].name);
+      std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+        return a.size() != b.size() ? a.size() < b.size() : a < b;
+      });
+      for (std::size_t i = 0; i < names.size(); ++i) {
+        d_.leaves[std::size_t(f.members[i])].name = names[i];
+      }
+    }
     DesignedPattern p;
     const DesignedLeaf& first = d_.leaves[std::size_t(f.members.front())];
     p.kind = f.kind == FoundPatternKind::Circular  ? PatternKind::Circular
@@ -723,8 +734,9 @@ class Designer {
       }
     }
     for (int i = 0; i < n; ++i) {
-      d_.leaves[std::size_t(f.members[std::size_t(i)])].pattern = index;
-      d_.leaves[std::size_t(f.members[std::size_t(i)])].member = i;
+      DesignedLeaf& l = d_.leaves[std::size_t(f.members[std::size_t(i)])];
+      l.pattern = index;
+      l.member = i;
     }
     d_.patterns.push_back(p);
   }

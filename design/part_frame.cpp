@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/export_cutters.h"
 #include "core/export_extent.h"
 #include "design/point_support.h"
 
@@ -186,14 +187,26 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
   } else if (!votes.empty()) {
     z = votes.front().direction;
   }
-  // x: the heaviest direction orthogonal to z that carries a share of the
-  // faces; else the world axis farthest from z, made orthogonal.
+  // x: of the directions orthogonal to z that carry a share of the faces,
+  // the one the part is longest along (a plate's length, not the normal of
+  // its largest side); else the world axis farthest from z, made orthogonal.
   constexpr double minShare = 0.05;
+  const auto lengthAlong = [&](const Vec3& d) {
+    Mat3 r;
+    r.col(0) = d;
+    r.col(1) = z.cross(d).normalized();
+    r.col(2) = z;
+    return exportExtent(transformedTree(tree, r.transpose(), Vec3::Zero())).size().x();
+  };
   Vec3 x = Vec3::Zero();
+  double longest = 0.0;
   for (const Vote& v : votes) {
-    if (std::abs(v.direction.dot(z)) <= sinTol && v.weight >= minShare * total) {
-      x = (v.direction - v.direction.dot(z) * z).normalized();
-      break;
+    if (std::abs(v.direction.dot(z)) > sinTol || v.weight < minShare * total) continue;
+    const Vec3 d = (v.direction - v.direction.dot(z) * z).normalized();
+    const double length = lengthAlong(d);
+    if (length > longest * (1.0 + 1e-6)) {
+      longest = length;
+      x = d;
     }
   }
   const bool spinFree = x.isZero();
@@ -224,15 +237,19 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
   frame.rotation.col(2) = z;
   frame.rotation = nearestWorldAxes(frame.rotation, options.worldTolerance);
 
-  // Origin: on the heaviest axis parallel to z (by its primitives' areas), at
-  // the bottom of the part; else the low corner of the part's bounds.
+  // Origin: on the heaviest axis parallel to z of a primitive that adds
+  // material (by its area), at the bottom of the part; else the low corner of
+  // the part's bounds.
   const CsgTree local = transformedTree(tree, frame.rotation.transpose(), Vec3::Zero());
   const Aabb localExtent = exportExtent(local);
   Vec3 origin = localExtent.min;
   double bestWeight = 0.0;
-  for (const Node* leaf : uniqueLeaves(local)) {
-    const Primitive& p = leaf->primitive;
-    if (!isAxial(p)) continue;
+  const LeafRoles roles = leafRoles(tree);
+  const std::vector<const Node*> worldLeaves = uniqueLeaves(tree);
+  const std::vector<const Node*> localLeaves = uniqueLeaves(local);
+  for (std::size_t i = 0; i < localLeaves.size(); ++i) {
+    const Primitive& p = localLeaves[i]->primitive;
+    if (!isAxial(p) || !roles.adding.count(worldLeaves[i])) continue;
     const auto axisAndCenter = [&]() -> std::pair<Vec3, Vec3> {
       if (const auto* c = p.as<Cylinder>()) return {c->axis, c->center};
       if (const auto* c = p.as<Cone>()) return {c->axis, c->center};

@@ -257,10 +257,13 @@ void writeDesignedScad(std::ostream& out, const DesignedTree& d, const ScadOptio
     out << p.name << " = " << formatNumber(p.value) << ";  // " << comment(p, d.units) << "\n";
   }
   const Vec3 euler = d.frame.eulerDegrees();
+  const bool unturned = d.frame.rotation == Mat3::Identity();  // no rotation to write
   if (!d.frame.isIdentity()) {
     out << "\n// The part's frame in the scan: its primitives are drawn in the frame, then placed.\n"
-        << "frame_origin = " << formatVector(d.frame.origin) << ";\n"
-        << "frame_rotation = " << formatVector(euler) << ";  // degrees about x, y, z\n";
+        << "frame_origin = " << formatVector(d.frame.origin) << ";\n";
+    if (!unturned) {
+      out << "frame_rotation = " << formatVector(euler) << ";  // degrees about x, y, z\n";
+    }
   }
   out << "\n// ---- drawing\n"
       << "// Curved primitives are polygons of segments(n) sides; raise detail for a finer render.\n"
@@ -291,7 +294,7 @@ void writeDesignedScad(std::ostream& out, const DesignedTree& d, const ScadOptio
   out << "\n// ---- the part\n";
   int indent = 0;
   if (!d.frame.isIdentity()) {
-    out << "translate(frame_origin) rotate(frame_rotation) {\n";
+    out << (unturned ? "translate(frame_origin) {\n" : "translate(frame_origin) rotate(frame_rotation) {\n");
     indent = 1;
   }
   w.node(*d.fitted.root(), indent, false);
