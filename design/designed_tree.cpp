@@ -876,7 +876,7 @@ class Designer {
   // slides: the tree must keep its shape with them.
   bool keepsShape() {
     grid_ = iouGrid(local_, options_.iouResolution);
-    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_);
+    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_, true);
     std::vector<int> all(d_.parameters.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = int(i);
     return check(all) >= 0.0;
@@ -885,6 +885,7 @@ class Designer {
   // The test a set of values must pass: valid primitives, IoU against the
   // fitted tree, the points' mean distance. Returns the IoU (-1: fails).
   double check(const std::vector<int>& changed) {
+    const IouGrid& grid = grid_;
     std::set<int> affected;
     for (int p : changed) {
       const std::set<int> l = leavesOf(p);
@@ -903,28 +904,38 @@ class Designer {
     // IoU: only grid points in the region can change.
     std::vector<Vec3> pts;
     std::vector<std::size_t> idx;
-    for (std::size_t i = 0; i < grid_.points.size(); ++i) {
-      if (region.contains(grid_.points[i])) {
-        pts.push_back(grid_.points[i]);
+    for (std::size_t i = 0; i < grid.points.size(); ++i) {
+      if (region.contains(grid.points[i])) {
+        pts.push_back(grid.points[i]);
         idx.push_back(i);
       }
     }
     std::vector<double> f(pts.size());
     tree.values(pts, f);
-    long inter = grid_.fittedCount, uni = grid_.fittedCount;
+    long inter = grid.fittedCount, uni = grid.fittedCount;
     for (std::size_t k = 0; k < pts.size(); ++k) {
-      const bool a = grid_.fittedInside[idx[k]], b = f[k] >= 0.0;
+      const bool a = grid.fittedInside[idx[k]], b = f[k] >= 0.0;
       inter += (a && b) - a;
       uni += (a || b) - a;
     }
     const double iou = uni > 0 ? double(inter) / double(uni) : 1.0;
     if (iou < options_.minIou) return -1.0;
     if (!localPoints_.empty()) {
-      std::vector<double> g(localPoints_.size());
-      tree.values(localPoints_, g);
-      double mean = 0.0;
-      for (double x : g) mean += std::abs(x);
-      mean /= double(g.size());
+      // Only points near the changed primitives move: those in their bounds
+      // grown by 2 % of D are measured again, the others keep their distance.
+      const Aabb near = region.grown(0.02 * diagonal_);
+      std::vector<Vec3> moved;
+      double before = 0.0;
+      for (std::size_t i = 0; i < localPoints_.size(); ++i) {
+        if (!near.contains(localPoints_[i])) continue;
+        moved.push_back(localPoints_[i]);
+        before += baseAbs_[i];
+      }
+      std::vector<double> g(moved.size());
+      tree.values(moved, g);
+      double after = 0.0;
+      for (double x : g) after += std::abs(x);
+      const double mean = baseDistance_ + (after - before) / double(localPoints_.size());
       const double noise = std::max(d_.noise, options_.minNoise * diagonal_);
       if (mean > baseDistance_ + options_.fitnessSlack * noise) return -1.0;
     }
@@ -933,7 +944,7 @@ class Designer {
 
   void snap() {
     if (grid_.points.empty()) grid_ = iouGrid(local_, options_.iouResolution);
-    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_);
+    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_, true);
     std::vector<std::optional<double>> candidate(d_.parameters.size());
     std::vector<int> all;
     for (std::size_t i = 0; i < d_.parameters.size(); ++i) {
@@ -973,11 +984,17 @@ class Designer {
     for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
   }
 
-  double meanDistance(const CsgTree& tree) const {
+  // The points' mean |f| to `tree`; `keep`: also remember each point's |f|
+  // as the fitted tree's.
+  double meanDistance(const CsgTree& tree, bool keep = false) {
     std::vector<double> g(localPoints_.size());
     tree.values(localPoints_, g);
     double mean = 0.0;
-    for (double x : g) mean += std::abs(x);
+    for (double& x : g) {
+      x = std::abs(x);
+      mean += x;
+    }
+    if (keep) baseAbs_ = g;
     return g.empty() ? 0.0 : mean / double(g.size());
   }
 
@@ -1074,6 +1091,7 @@ class Designer {
   std::vector<int> countSlots_;
   IouGrid grid_;
   double baseDistance_ = 0.0;
+  std::vector<double> baseAbs_;  // each point's |f| to the fitted tree
 };
 
 }  // namespace
