@@ -12,6 +12,7 @@
 #include "core/decimal.h"
 #include "core/export_cutters.h"
 #include "core/export_extent.h"
+#include "design/leaf_fields.h"
 #include "design/pattern_detection.h"
 #include "design/point_support.h"
 #include "design/role_names.h"
@@ -22,20 +23,9 @@ namespace {
 constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const char* const kAxisLetter[3] = {"x", "y", "z"};
-// A point lies on a cap (not on the side) of a cylinder or cone when its
-// gradient is this close to the axis: caps' gradients are the axis itself,
-// sides' are across it (a cone's tilted by its half-angle).
-constexpr double kCapCosine = 0.99;
-
-// What a value measures, for grouping: values of one category and close
-// values are one parameter.
-enum class Category { PositionX, PositionY, PositionZ, Radius, Step, Angle, Count };
-
-Category positionAlong(int axis) { return Category(axis); }
-
 // One value of the fitted tree before grouping.
 struct Slot {
-  Category category = Category::Step;
+  ValueCategory category = ValueCategory::Step;
   double value = 0.0;
   double support = 0.0;  // points holding it (kInf: exact, e.g. a count)
   double lever = 1.0;    // Angle: radius the angle is read at (its uncertainty is u / lever)
@@ -43,21 +33,6 @@ struct Slot {
   std::set<int> leaves;  // designed leaves using it
   std::string owner;     // a pattern's name, when a pattern owns it
 };
-
-// A field of a leaf: the expression to fill and where its value lives.
-struct Field {
-  Expression* expression;
-  Category category;
-  std::string name;  // "x0", "r", ...
-  double value;
-  bool crossPosition = false;  // Axial/Sphere position across z (moved by a circular pattern)
-  int positionAxis = -1;       // a position along this frame axis (moved by rows), else -1
-};
-
-bool aligned(const Vec3& d, double tol, int& axis) {
-  d.cwiseAbs().maxCoeff(&axis);
-  return std::abs(d[axis]) >= std::cos(tol);
-}
 
 std::vector<const Node*> uniqueLeaves(const CsgTree& tree) {
   std::vector<const Node*> out;
@@ -67,230 +42,10 @@ std::vector<const Node*> uniqueLeaves(const CsgTree& tree) {
   return out;
 }
 
-// The leaf's form from its frame-coordinate primitive.
-void classify(DesignedLeaf& leaf, const Primitive& p, double tol) {
-  leaf.type = p.type();
-  leaf.local = p;
-  leaf.form = LeafForm::Free;
-  int a = 2;
-  if (const auto* b = p.as<Box>()) {
-    bool all = true;
-    for (int j = 0; j < 3; ++j) all = all && aligned(b->axes.col(j), tol, a);
-    if (all) {
-      leaf.form = LeafForm::AlignedBox;
-    } else {
-      for (int j = 0; j < 3; ++j) {
-        if (std::abs(b->axes(2, j)) >= std::cos(tol)) leaf.form = LeafForm::TurnedBox;
-      }
-    }
-  } else if (const auto* h = p.as<HalfSpace>()) {
-    if (aligned(h->normal, tol, a)) {
-      leaf.form = LeafForm::AlignedHalfSpace;
-      leaf.axis = a;
-      leaf.flipped = h->normal[a] < 0.0;
-    } else {
-      leaf.form = LeafForm::TiltedHalfSpace;
-    }
-  } else if (p.type() == PrimitiveType::Sphere) {
-    leaf.form = LeafForm::Sphere;
-  } else {
-    Vec3 axis;
-    if (const auto* c = p.as<Cylinder>()) axis = c->axis;
-    if (const auto* c = p.as<Cone>()) axis = c->axis;
-    if (const auto* t = p.as<Torus>()) axis = t->axis;
-    if (aligned(axis, tol, a)) {
-      leaf.form = LeafForm::Axial;
-      leaf.axis = a;
-    }
-  }
-}
-
-// The fields of a classified leaf, with their fitted values.
-std::vector<Field> fieldsOf(DesignedLeaf& leaf) {
-  std::vector<Field> f;
-  const Primitive& p = leaf.local;
-  const int a = leaf.axis;
-  const auto pos = [&](Expression& e, int axis, const std::string& name, double v, bool cross) {
-    f.push_back({&e, positionAlong(axis), name, v, cross, axis});
-  };
-  switch (leaf.form) {
-    case LeafForm::AlignedBox: {
-      const Box& b = *p.as<Box>();
-      for (int j = 0; j < 3; ++j) {
-        int k = 0;
-        aligned(b.axes.col(j), 1.0, k);
-        const std::string l = kAxisLetter[k];
-        pos(leaf.lo[std::size_t(k)], k, l + "0", b.center[k] - b.halfSize[j], false);
-        pos(leaf.hi[std::size_t(k)], k, l + "1", b.center[k] + b.halfSize[j], false);
-      }
-      break;
-    }
-    case LeafForm::TurnedBox: {
-      const Box& b = *p.as<Box>();
-      int j = 0;
-      b.axes.row(2).cwiseAbs().maxCoeff(&j);
-      const int u = (j + 1) % 3, w = (j + 2) % 3;  // its own x and y, right-handed about z
-      Vec3 ax = b.axes.col(u);
-      double width = 2 * b.halfSize[u], depth = 2 * b.halfSize[w];
-      if (b.axes(2, j) < 0) std::swap(width, depth), ax = b.axes.col(w);
-      double turn = std::atan2(ax.y(), ax.x()) * kDeg;
-      // The turn in (-45, 45]: a quarter turn swaps the sizes.
-      while (turn > 45.0) turn -= 90.0, std::swap(width, depth);
-      while (turn <= -45.0) turn += 90.0, std::swap(width, depth);
-      pos(leaf.at[0], 0, "x", b.center.x(), false);
-      pos(leaf.at[1], 1, "y", b.center.y(), false);
-      pos(leaf.lo[2], 2, "z0", b.center.z() - b.halfSize[j], false);
-      pos(leaf.hi[2], 2, "z1", b.center.z() + b.halfSize[j], false);
-      f.push_back({&leaf.radius, Category::Step, "width", width});
-      f.push_back({&leaf.radius2, Category::Step, "depth", depth});
-      f.push_back({&leaf.angle, Category::Angle, "turn", turn});
-      break;
-    }
-    case LeafForm::Axial: {
-      Vec3 c;
-      double h = 0.0;
-      if (const auto* s = p.as<Cylinder>()) c = s->center, h = s->height;
-      if (const auto* s = p.as<Cone>()) c = s->center, h = s->height;
-      if (const auto* s = p.as<Torus>()) c = s->center;
-      for (int k = 0; k < 3; ++k) {
-        if (k != a) pos(leaf.at[std::size_t(k)], k, kAxisLetter[k], c[k], true);
-      }
-      const std::string l = kAxisLetter[a];
-      if (const auto* t = p.as<Torus>()) {
-        pos(leaf.at[std::size_t(a)], a, l, c[a], false);
-        f.push_back({&leaf.radius, Category::Radius, "major_r", t->majorRadius});
-        f.push_back({&leaf.radius2, Category::Radius, "minor_r", t->minorRadius});
-        break;
-      }
-      pos(leaf.lo[std::size_t(a)], a, l + "0", c[a] - 0.5 * h, false);
-      pos(leaf.hi[std::size_t(a)], a, l + "1", c[a] + 0.5 * h, false);
-      if (const auto* s = p.as<Cylinder>()) {
-        f.push_back({&leaf.radius, Category::Radius, "r", s->radius});
-      } else if (const auto* s = p.as<Cone>()) {
-        const bool up = s->axis[a] > 0.0;
-        f.push_back({&leaf.radius, Category::Radius, "r0", up ? s->radiusBottom : s->radiusTop});
-        f.push_back({&leaf.radius2, Category::Radius, "r1", up ? s->radiusTop : s->radiusBottom});
-      }
-      break;
-    }
-    case LeafForm::Sphere: {
-      const auto& s = *p.as<Sphere>();
-      for (int k = 0; k < 3; ++k) pos(leaf.at[std::size_t(k)], k, kAxisLetter[k], s.center[k], k < 2);
-      f.push_back({&leaf.radius, Category::Radius, "r", s.radius});
-      break;
-    }
-    case LeafForm::AlignedHalfSpace: {
-      const auto& h = *p.as<HalfSpace>();
-      const std::string l = kAxisLetter[a];
-      if (leaf.flipped) {
-        pos(leaf.lo[std::size_t(a)], a, l + "0", -h.offset, false);
-      } else {
-        pos(leaf.hi[std::size_t(a)], a, l + "1", h.offset, false);
-      }
-      break;
-    }
-    case LeafForm::TiltedHalfSpace: {
-      const auto& h = *p.as<HalfSpace>();
-      const double tilt = std::acos(std::clamp(h.normal.z(), -1.0, 1.0)) * kDeg;
-      const double turn = std::atan2(h.normal.y(), h.normal.x()) * kDeg;
-      f.push_back({&leaf.radius, Category::Step, "offset", h.offset});
-      f.push_back({&leaf.angle, Category::Angle, "tilt", tilt});
-      f.push_back({&leaf.angle2, Category::Angle, "turn", turn});
-      break;
-    }
-    case LeafForm::Free:
-      break;
-  }
-  return f;
-}
-
-// Points supporting each field of a leaf (indices as fieldsOf()), from the
-// local gradients of the points on it.
-std::vector<double> fieldSupport(const DesignedLeaf& leaf, const std::vector<Field>& fields,
-                                 const std::vector<Vec3>& gradients) {
-  std::vector<double> n(fields.size(), 0.0);
-  const auto add = [&](const Expression* e) {
-    for (std::size_t i = 0; i < fields.size(); ++i) {
-      if (fields[i].expression == e) n[i] += 1.0;
-    }
-  };
-  const auto addAll = [&]() {
-    for (double& x : n) x += 1.0;
-  };
-  for (const Vec3& g : gradients) {
-    const int a = leaf.axis;
-    switch (leaf.form) {
-      case LeafForm::AlignedBox: {
-        int k = 0;
-        g.cwiseAbs().maxCoeff(&k);
-        add(g[k] > 0.0 ? &leaf.lo[std::size_t(k)] : &leaf.hi[std::size_t(k)]);
-        break;
-      }
-      case LeafForm::TurnedBox:
-        if (std::abs(g.z()) > kCapCosine) {
-          add(g.z() > 0.0 ? &leaf.lo[2] : &leaf.hi[2]);
-        } else {
-          add(&leaf.at[0]), add(&leaf.at[1]), add(&leaf.radius), add(&leaf.radius2), add(&leaf.angle);
-        }
-        break;
-      case LeafForm::Axial:
-        if (leaf.type != PrimitiveType::Torus && std::abs(g[a]) > kCapCosine) {
-          add(g[a] > 0.0 ? &leaf.lo[std::size_t(a)] : &leaf.hi[std::size_t(a)]);
-        } else if (leaf.type == PrimitiveType::Torus) {
-          addAll();
-        } else {
-          for (int k = 0; k < 3; ++k) {
-            if (k != a) add(&leaf.at[std::size_t(k)]);
-          }
-          add(&leaf.radius);
-          add(&leaf.radius2);
-        }
-        break;
-      default:
-        addAll();
-    }
-  }
-  return n;
-}
-
-// A cone's cap that no point holds can slide along the cone: moved to the
-// nearest whole unit along the axis (its radius following the slope), its
-// numbers become the ones the cone was drawn with when it was drawn there.
-void slideFreeConeCaps(const DesignedLeaf& leaf, std::vector<Field>& fields,
-                       const std::vector<double>& support) {
-  if (leaf.form != LeafForm::Axial || leaf.type != PrimitiveType::Cone) return;
-  const auto find = [&](const Expression* e) {
-    for (std::size_t k = 0; k < fields.size(); ++k) {
-      if (fields[k].expression == e) return k;
-    }
-    return fields.size();
-  };
-  const std::size_t lo = find(&leaf.lo[std::size_t(leaf.axis)]),
-                    hi = find(&leaf.hi[std::size_t(leaf.axis)]), r0 = find(&leaf.radius),
-                    r1 = find(&leaf.radius2);
-  if (hi >= fields.size() || r1 >= fields.size()) return;
-  const double z0 = fields[lo].value, z1 = fields[hi].value;
-  const double slope = (fields[r1].value - fields[r0].value) / (z1 - z0);
-  const auto slide = [&](std::size_t z, std::size_t r) {
-    if (support[z] > 0.0) return;
-    const double to = std::round(fields[z].value);
-    const double radius = fields[r].value + slope * (to - fields[z].value);
-    if (!(radius >= 0.0)) return;
-    fields[z].value = to;
-    fields[r].value = radius;
-  };
-  slide(lo, r0);
-  slide(hi, r1);
-  if (!(fields[hi].value > fields[lo].value)) {  // undo: the cone would vanish
-    fields[lo].value = z0;
-    fields[hi].value = z1;
-    fields[r0].value = fields[r1].value - slope * (z1 - z0);
-  }
-}
-
 std::string plural(const std::string& role, int n) {
   if (n == 1) return "1 " + role;
-  if (!role.empty() && (role.back() == 's' || role.back() == 'h')) return std::to_string(n) + " " + role + "es";
+  if (!role.empty() && (role.back() == 's' || role.back() == 'h'))
+    return std::to_string(n) + " " + role + "es";
   return std::to_string(n) + " " + role + "s";
 }
 
@@ -335,142 +90,7 @@ bool validPrimitive(const Primitive& p) {
   return true;
 }
 
-// Rebuilds `node` with each leaf replaced by make(leaf): its primitive and name.
-template <class Make>
-NodePtr rebuilt(const NodePtr& node, const Make& make, std::unordered_map<const Node*, NodePtr>& done) {
-  if (const auto it = done.find(node.get()); it != done.end()) return it->second;
-  NodePtr out;
-  if (node->kind == NodeKind::Primitive) {
-    auto [primitive, name] = make(node.get());
-    out = std::make_shared<const Node>(std::move(primitive), std::move(name));
-  } else {
-    std::vector<NodePtr> children;
-    for (const NodePtr& c : node->children) children.push_back(rebuilt(c, make, done));
-    out = std::make_shared<const Node>(node->kind, std::move(children));
-  }
-  done[node.get()] = out;
-  return out;
-}
-
 }  // namespace
-
-std::string DesignedPattern::kindName() const {
-  switch (kind) {
-    case PatternKind::Circular:
-      return "circular";
-    case PatternKind::Lattice:
-      return "lattice";
-    default:
-      return "row";
-  }
-}
-
-int DesignedTree::leafIndex(const Node* node) const {
-  for (std::size_t i = 0; i < leaves.size(); ++i) {
-    if (leaves[i].node == node) return int(i);
-  }
-  return -1;
-}
-
-int DesignedTree::snappedCount() const {
-  return int(std::count_if(parameters.begin(), parameters.end(),
-                           [](const DesignParameter& p) { return p.snapped; }));
-}
-
-Primitive DesignedTree::localPrimitive(int index) const {
-  const DesignedLeaf& l = leaves[std::size_t(index)];
-  const auto v = [&](const Expression& e) { return e.value(parameters); };
-  const int a = l.axis;
-  Vec3 shift = Vec3::Zero();
-  bool onCircle = false;
-  double cx = 0.0, cy = 0.0;
-  if (l.pattern >= 0) {
-    const DesignedPattern& pat = patterns[std::size_t(l.pattern)];
-    const int n = int(std::lround(parameters[std::size_t(pat.count)].value));
-    if (pat.kind == PatternKind::Circular) {
-      const double angle = (v(pat.phase) + l.member * 360.0 / n) / kDeg;
-      cx = v(pat.centerX) + v(pat.radius) * std::cos(angle);
-      cy = v(pat.centerY) + v(pat.radius) * std::sin(angle);
-      onCircle = true;
-    } else {
-      const int i = l.member % n, j = l.member / n;
-      for (int k = 0; k < 3; ++k) {
-        shift[k] = i * v(pat.step[std::size_t(k)]) + j * v(pat.step2[std::size_t(k)]);
-      }
-    }
-  }
-  Vec3 at(v(l.at[0]), v(l.at[1]), v(l.at[2]));
-  if (onCircle) at.x() = cx, at.y() = cy;
-  Primitive p = l.local;
-  switch (l.form) {
-    case LeafForm::AlignedBox: {
-      Box b;
-      for (int k = 0; k < 3; ++k) {
-        const double lo = v(l.lo[std::size_t(k)]), hi = v(l.hi[std::size_t(k)]);
-        b.center[k] = 0.5 * (lo + hi);
-        b.halfSize[k] = 0.5 * (hi - lo);
-      }
-      p = b;
-      break;
-    }
-    case LeafForm::TurnedBox: {
-      const double t = v(l.angle) / kDeg;
-      Box b;
-      b.center = Vec3(at.x(), at.y(), 0.5 * (v(l.lo[2]) + v(l.hi[2])));
-      b.axes << std::cos(t), -std::sin(t), 0, std::sin(t), std::cos(t), 0, 0, 0, 1;
-      b.halfSize = 0.5 * Vec3(v(l.radius), v(l.radius2), v(l.hi[2]) - v(l.lo[2]));
-      p = b;
-      break;
-    }
-    case LeafForm::Axial: {
-      const Vec3 axis = Vec3::Unit(a);
-      const double lo = v(l.lo[std::size_t(a)]), hi = v(l.hi[std::size_t(a)]);
-      Vec3 c = at;
-      if (l.type == PrimitiveType::Torus) {
-        p = Torus{c, axis, v(l.radius), v(l.radius2)};
-        break;
-      }
-      c[a] = 0.5 * (lo + hi);
-      if (l.type == PrimitiveType::Cylinder) {
-        p = Cylinder{c, axis, v(l.radius), hi - lo};
-      } else {
-        p = Cone{c, axis, v(l.radius), v(l.radius2), hi - lo};
-      }
-      break;
-    }
-    case LeafForm::Sphere:
-      p = Sphere{at, v(l.radius)};
-      break;
-    case LeafForm::AlignedHalfSpace:
-      p = l.flipped ? HalfSpace{-Vec3::Unit(a), -v(l.lo[std::size_t(a)])}
-                    : HalfSpace{Vec3::Unit(a), v(l.hi[std::size_t(a)])};
-      break;
-    case LeafForm::TiltedHalfSpace: {
-      const double tilt = v(l.angle) / kDeg, turn = v(l.angle2) / kDeg;
-      const Vec3 n(std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), std::cos(tilt));
-      p = HalfSpace{n.normalized(), v(l.radius)};
-      break;
-    }
-    case LeafForm::Free:
-      break;
-  }
-  if (!shift.isZero(0.0)) p = transformedPrimitive(p, Mat3::Identity(), shift);
-  return p;
-}
-
-CsgTree DesignedTree::localTree() const {
-  if (fitted.empty()) return {};
-  std::unordered_map<const Node*, NodePtr> done;
-  return CsgTree(rebuilt(
-      fitted.root(),
-      [&](const Node* leaf) {
-        const int i = leafIndex(leaf);
-        return std::make_pair(localPrimitive(i), leaves[std::size_t(i)].name);
-      },
-      done));
-}
-
-CsgTree DesignedTree::tree() const { return treeInWorld(localTree(), frame); }
 
 namespace {
 
@@ -521,7 +141,7 @@ class Designer {
       l.cuts = roles.removing.count(world[i]) > 0;
       l.adds = roles.adding.count(world[i]) > 0 || !l.cuts;
       l.role = roleName(local[i]->primitive, l.cuts && !l.adds, diagonal_);
-      classify(l, local[i]->primitive, options_.alignTolerance);
+      classifyLeaf(l, local[i]->primitive, options_.alignTolerance);
       ++roleCount[l.role];
     }
     for (DesignedLeaf& l : d_.leaves) {
@@ -533,7 +153,8 @@ class Designer {
       const PointSupport support = pointSupport(local_, localPoints_);
       d_.noise = support.noise;
       for (std::size_t i = 0; i < localPoints_.size(); ++i) {
-        if (support.leaf[i]) gradients_[std::size_t(localIndex_.at(support.leaf[i]))].push_back(support.gradient[i]);
+        if (support.leaf[i])
+          gradients_[std::size_t(localIndex_.at(support.leaf[i]))].push_back(support.gradient[i]);
       }
     }
   }
@@ -597,18 +218,19 @@ class Designer {
         l.adds || !l.cuts) {
       return false;
     }
-    const std::vector<Field> fields = fieldsOf(l);
+    const std::vector<LeafField> fields = leafFields(l);
     const std::vector<double> n = fieldSupport(l, fields, gradients_[std::size_t(i)]);
     for (std::size_t k = 0; k < fields.size(); ++k) {
       if ((fields[k].expression == &l.lo[std::size_t(l.axis)] ||
-           fields[k].expression == &l.hi[std::size_t(l.axis)]) && n[k] > 0.0) {
+           fields[k].expression == &l.hi[std::size_t(l.axis)]) &&
+          n[k] > 0.0) {
         return false;
       }
     }
     return true;
   }
 
-  int addSlot(Category c, double value, double support, const std::string& name, int leaf,
+  int addSlot(ValueCategory c, double value, double support, const std::string& name, int leaf,
               double lever = 1.0) {
     Slot s;
     s.category = c;
@@ -635,13 +257,13 @@ class Designer {
         continue;
       }
       DesignedLeaf& l = d_.leaves[i];
-      std::vector<Field> fields = fieldsOf(l);
+      std::vector<LeafField> fields = leafFields(l);
       const std::vector<double> n = fieldSupport(l, fields, gradients_[i]);
       if (!localPoints_.empty() && slide_) slideFreeConeCaps(l, fields, n);
       for (std::size_t k = 0; k < fields.size(); ++k) {
-        *fields[k].expression = Expression::of(addSlot(fields[k].category, fields[k].value, n[k],
-                                                       l.name + "_" + fields[k].name, int(i),
-                                                       leverOf(l)));
+        *fields[k].expression =
+            Expression::of(addSlot(fields[k].category, fields[k].value, n[k],
+                                   l.name + "_" + fields[k].name, int(i), leverOf(l)));
       }
     }
   }
@@ -664,8 +286,9 @@ class Designer {
              : f.kind == FoundPatternKind::Lattice ? PatternKind::Lattice
                                                    : PatternKind::Row;
     const std::string base = first.role == "hole" ? "bolt" : first.role;
-    p.name = base + (p.kind == PatternKind::Circular ? "_circle"
-                     : p.kind == PatternKind::Lattice ? "_grid" : "_row");
+    p.name = base + (p.kind == PatternKind::Circular  ? "_circle"
+                     : p.kind == PatternKind::Lattice ? "_grid"
+                                                      : "_row");
     for (const DesignedPattern& other : d_.patterns) {
       if (other.name == p.name) p.name += "_" + std::to_string(d_.patterns.size() + 1);
     }
@@ -674,18 +297,19 @@ class Designer {
     const int n = int(f.members.size());
     // Member fields: one slot each, the members' mean (positions less their
     // offsets in the pattern), supported by every member's points.
-    std::vector<std::vector<Field>> fields;
+    std::vector<std::vector<LeafField>> fields;
     std::vector<std::vector<double>> support;
     for (int m : f.members) {
-      fields.push_back(fieldsOf(d_.leaves[std::size_t(m)]));
-      support.push_back(fieldSupport(d_.leaves[std::size_t(m)], fields.back(), gradients_[std::size_t(m)]));
+      fields.push_back(leafFields(d_.leaves[std::size_t(m)]));
+      support.push_back(
+          fieldSupport(d_.leaves[std::size_t(m)], fields.back(), gradients_[std::size_t(m)]));
       if (!localPoints_.empty() && slide_) {
         slideFreeConeCaps(d_.leaves[std::size_t(m)], fields.back(), support.back());
       }
     }
     double crossSupport = 0.0;
     for (std::size_t k = 0; k < fields.front().size(); ++k) {
-      const Field& f0 = fields.front()[k];
+      const LeafField& f0 = fields.front()[k];
       double sum = 0.0, n_k = 0.0;
       for (int i = 0; i < n; ++i) {
         double value = fields[std::size_t(i)][k].value;
@@ -701,7 +325,8 @@ class Designer {
         crossSupport += n_k / 2;
         continue;  // placed by the pattern
       }
-      const int s = addSlot(f0.category, sum / n, n_k, first.name + "_" + f0.name, f.members.front());
+      const int s =
+          addSlot(f0.category, sum / n, n_k, first.name + "_" + f0.name, f.members.front());
       for (int m : f.members) slots_[std::size_t(s)].leaves.insert(m);
       for (int i = 0; i < n; ++i) *fields[std::size_t(i)][k].expression = Expression::of(s);
     }
@@ -709,26 +334,32 @@ class Designer {
       slots_[std::size_t(slot)].owner = p.name;
       return Expression::of(slot);
     };
-    countSlots_.push_back(addSlot(Category::Count, f.count, kInf, p.name + "_count", -1));
+    countSlots_.push_back(addSlot(ValueCategory::Count, f.count, kInf, p.name + "_count", -1));
     p.count = countSlots_.back();
     slots_[std::size_t(p.count)].owner = p.name;
     if (p.kind == PatternKind::Circular) {
-      p.centerX = own(addSlot(Category::PositionX, f.center.x(), crossSupport, p.name + "_x", -1));
-      p.centerY = own(addSlot(Category::PositionY, f.center.y(), crossSupport, p.name + "_y", -1));
-      p.radius = own(addSlot(Category::Step, f.radius, crossSupport, p.name + "_r", -1));
-      p.phase = own(addSlot(Category::Angle, f.phase, crossSupport, p.name + "_phase", -1, f.radius));
+      p.centerX =
+          own(addSlot(ValueCategory::PositionX, f.center.x(), crossSupport, p.name + "_x", -1));
+      p.centerY =
+          own(addSlot(ValueCategory::PositionY, f.center.y(), crossSupport, p.name + "_y", -1));
+      p.radius = own(addSlot(ValueCategory::Step, f.radius, crossSupport, p.name + "_r", -1));
+      p.phase = own(
+          addSlot(ValueCategory::Angle, f.phase, crossSupport, p.name + "_phase", -1, f.radius));
     } else {
       for (int a = 0; a < 3; ++a) {
         const double tol = options_.patternTolerance * diagonal_;
         if (std::abs(f.step[a]) > tol) {
-          p.step[std::size_t(a)] = own(addSlot(Category::Step, f.step[a], kInf, p.name + "_d" + kAxisLetter[a], -1));
+          p.step[std::size_t(a)] = own(
+              addSlot(ValueCategory::Step, f.step[a], kInf, p.name + "_d" + kAxisLetter[a], -1));
         }
         if (std::abs(f.step2[a]) > tol) {
-          p.step2[std::size_t(a)] = own(addSlot(Category::Step, f.step2[a], kInf, p.name + "_d" + kAxisLetter[a], -1));
+          p.step2[std::size_t(a)] = own(
+              addSlot(ValueCategory::Step, f.step2[a], kInf, p.name + "_d" + kAxisLetter[a], -1));
         }
       }
       if (p.kind == PatternKind::Lattice) {
-        countSlots_.push_back(addSlot(Category::Count, f.count2, kInf, p.name + "_count2", -1));
+        countSlots_.push_back(
+            addSlot(ValueCategory::Count, f.count2, kInf, p.name + "_count2", -1));
         p.count2 = countSlots_.back();
         slots_[std::size_t(p.count2)].owner = p.name;
       }
@@ -755,7 +386,8 @@ class Designer {
     std::vector<std::vector<int>> members;
     for (std::size_t k = 0; k < order.size(); ++k) {
       const Slot& s = slots_[std::size_t(order[k])];
-      const bool joins = k > 0 && s.category != Category::Count && s.category != Category::Step &&
+      const bool joins = k > 0 && s.category != ValueCategory::Count &&
+                         s.category != ValueCategory::Step &&
                          slots_[std::size_t(order[k - 1])].category == s.category &&
                          s.value - slots_[std::size_t(order[k - 1])].value <= tol;
       if (!joins) members.emplace_back();
@@ -771,16 +403,17 @@ class Designer {
       DesignParameter p;
       const Slot& first = slots_[std::size_t(group.front())];
       p.name = first.name;
-      p.kind = first.category == Category::Angle   ? ParameterKind::Angle
-               : first.category == Category::Count ? ParameterKind::Count
-                                                   : ParameterKind::Length;
+      p.kind = first.category == ValueCategory::Angle   ? ParameterKind::Angle
+               : first.category == ValueCategory::Count ? ParameterKind::Count
+                                                        : ParameterKind::Length;
       double sum = 0.0, support = 0.0;
       Slot merged = first;
       for (int s : group) {
         sum += slots_[std::size_t(s)].value;
         support += slots_[std::size_t(s)].support;
         paramOf[std::size_t(s)] = index;
-        merged.leaves.insert(slots_[std::size_t(s)].leaves.begin(), slots_[std::size_t(s)].leaves.end());
+        merged.leaves.insert(slots_[std::size_t(s)].leaves.begin(),
+                             slots_[std::size_t(s)].leaves.end());
       }
       p.fitted = sum / double(group.size());
       p.value = p.fitted;
@@ -855,7 +488,8 @@ class Designer {
   std::set<int> leavesOf(int p) const {
     std::set<int> out;
     const auto uses = [&](const Expression& e) {
-      return std::any_of(e.terms.begin(), e.terms.end(), [&](const auto& t) { return t.second == p; });
+      return std::any_of(e.terms.begin(), e.terms.end(),
+                         [&](const auto& t) { return t.second == p; });
     };
     for (std::size_t i = 0; i < d_.leaves.size(); ++i) {
       const DesignedLeaf& l = d_.leaves[i];
@@ -950,14 +584,16 @@ class Designer {
     for (std::size_t i = 0; i < d_.parameters.size(); ++i) {
       const DesignParameter& p = d_.parameters[i];
       if (p.kind == ParameterKind::Count) continue;
-      candidate[i] = p.kind == ParameterKind::Angle ? simplestAngle(p.fitted, p.uncertainty)
-                                                    : simplestLength(p.fitted, p.uncertainty, d_.units);
+      candidate[i] = p.kind == ParameterKind::Angle
+                         ? simplestAngle(p.fitted, p.uncertainty)
+                         : simplestLength(p.fitted, p.uncertainty, d_.units);
       if (candidate[i] && *candidate[i] != p.fitted) all.push_back(int(i));
       if (candidate[i] && *candidate[i] == p.fitted) d_.parameters[i].snapped = true;
     }
     const auto apply = [&](const std::vector<int>& set, bool on) {
       for (int i : set) {
-        d_.parameters[std::size_t(i)].value = on ? *candidate[std::size_t(i)] : d_.parameters[std::size_t(i)].fitted;
+        d_.parameters[std::size_t(i)].value =
+            on ? *candidate[std::size_t(i)] : d_.parameters[std::size_t(i)].fitted;
       }
     };
     apply(all, true);
@@ -972,7 +608,8 @@ class Designer {
         apply({i}, false);
         if (iou >= 0.0) passing.emplace_back(iou, i);
       }
-      std::stable_sort(passing.begin(), passing.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      std::stable_sort(passing.begin(), passing.end(),
+                       [](const auto& a, const auto& b) { return a.first > b.first; });
       all.clear();
       for (const auto& [iou, i] : passing) all.push_back(i);
       apply(all, true);
@@ -1008,7 +645,7 @@ class Designer {
     for (std::size_t i = 0; i < d_.parameters.size(); ++i) {
       const DesignParameter& p = d_.parameters[i];
       const Slot& s = paramSlots_[i];
-      const bool mergeable = p.snapped && s.category <= Category::Radius && s.owner.empty();
+      const bool mergeable = p.snapped && s.category <= ValueCategory::Radius && s.owner.empty();
       const auto key = std::make_pair(int(s.category), p.value);
       if (mergeable) {
         if (const auto it = seen.find(key); it != seen.end()) {
@@ -1096,8 +733,8 @@ class Designer {
 
 }  // namespace
 
-DesignedTree designTree(const CsgTree& fitted, const PartFrame& frame,
-                        std::span<const Vec3> points, const DesignOptions& options) {
+DesignedTree designTree(const CsgTree& fitted, const PartFrame& frame, std::span<const Vec3> points,
+                        const DesignOptions& options) {
   if (fitted.empty()) throw std::invalid_argument("designTree: empty tree");
   return Designer(fitted, frame, points, options).run();
 }

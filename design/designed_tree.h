@@ -40,13 +40,13 @@ enum class ParameterKind {
 
 /// A named number of the designed tree.
 struct DesignParameter {
-  std::string name;               ///< identifier, e.g. "bolt_circle_r"
+  std::string name;                            ///< identifier, e.g. "bolt_circle_r"
   ParameterKind kind = ParameterKind::Length;  ///< what it measures
-  double fitted = 0.0;            ///< the fitted tree's value (mean over its uses)
-  double value = 0.0;             ///< the designed value (the fitted one when not snapped)
-  double uncertainty = 0.0;       ///< half-width it was snapped within (inf: no point holds it)
-  bool snapped = false;           ///< value is a designed (ladder) value
-  std::string usedBy;             ///< what uses it, e.g. "6 holes"
+  double fitted = 0.0;                         ///< the fitted tree's value (mean over its uses)
+  double value = 0.0;        ///< the designed value (the fitted one when not snapped)
+  double uncertainty = 0.0;  ///< half-width it was snapped within (inf: no point holds it)
+  bool snapped = false;      ///< value is a designed (ladder) value
+  std::string usedBy;        ///< what uses it, e.g. "6 holes"
 };
 
 /// How a designed leaf is written.
@@ -69,26 +69,26 @@ enum class LeafForm {
 /// lo[axis] (flipped); TurnedBox: at[0], at[1] (centre), lo[2], hi[2]
 /// (faces), radius and radius2 (its sizes along its own x and y), angle.
 struct DesignedLeaf {
-  const Node* node = nullptr;     ///< the leaf of the fitted tree
-  std::string name;               ///< unique identifier from its role, e.g. "hole_2"
-  std::string role;               ///< "hole", "plate", ... (design/role_names.h)
-  bool cuts = false;              ///< used to remove material
-  bool adds = false;              ///< used to add material
-  LeafForm form = LeafForm::Free; ///< how it is written
+  const Node* node = nullptr;               ///< the leaf of the fitted tree
+  std::string name;                         ///< unique identifier from its role, e.g. "hole_2"
+  std::string role;                         ///< "hole", "plate", ... (design/role_names.h)
+  bool cuts = false;                        ///< used to remove material
+  bool adds = false;                        ///< used to add material
+  LeafForm form = LeafForm::Free;           ///< how it is written
   PrimitiveType type = PrimitiveType::Box;  ///< its primitive type
-  int axis = 2;                   ///< Axial and AlignedHalfSpace: the frame axis
-  bool flipped = false;           ///< AlignedHalfSpace: outward normal is −axis
-  std::array<Expression, 3> lo;   ///< low faces / caps, per frame axis
-  std::array<Expression, 3> hi;   ///< high faces / caps, per frame axis
-  std::array<Expression, 3> at;   ///< centre coordinates, per frame axis
-  Expression radius;              ///< radius (cone: at lo; torus: major)
-  Expression radius2;             ///< cone: radius at hi; torus: minor radius
-  Expression angle;               ///< TurnedBox: its turn about z from the frame's x; TiltedHalfSpace:
-                                  ///< its normal's angle from z (degrees)
-  Expression angle2;              ///< TiltedHalfSpace: its normal's turn about z from x (degrees)
-  Primitive local;                ///< Free: the primitive in frame coordinates
-  int pattern = -1;               ///< index of its pattern, or -1
-  int member = 0;                 ///< its index in the pattern (0: the one written)
+  int axis = 2;                             ///< Axial and AlignedHalfSpace: the frame axis
+  bool flipped = false;                     ///< AlignedHalfSpace: outward normal is −axis
+  std::array<Expression, 3> lo;             ///< low faces / caps, per frame axis
+  std::array<Expression, 3> hi;             ///< high faces / caps, per frame axis
+  std::array<Expression, 3> at;             ///< centre coordinates, per frame axis
+  Expression radius;                        ///< radius (cone: at lo; torus: major)
+  Expression radius2;                       ///< cone: radius at hi; torus: minor radius
+  Expression angle;   ///< TurnedBox: its turn about z from the frame's x; TiltedHalfSpace:
+                      ///< its normal's angle from z (degrees)
+  Expression angle2;  ///< TiltedHalfSpace: its normal's turn about z from x (degrees)
+  Primitive local;    ///< Free: the primitive in frame coordinates
+  int pattern = -1;   ///< index of its pattern, or -1
+  int member = 0;     ///< its index in the pattern (0: the one written)
 };
 
 /// How a pattern repeats its member.
@@ -138,16 +138,16 @@ struct DesignOptions {
 
 /// The designed form of a fitted tree.
 struct DesignedTree {
-  CsgTree fitted;                          ///< the fitted tree (world coordinates)
-  PartFrame frame;                         ///< frame to world
+  CsgTree fitted;                             ///< the fitted tree (world coordinates)
+  PartFrame frame;                            ///< frame to world
   UnitSystem units = UnitSystem::Millimetre;  ///< the grid values were snapped on
-  std::vector<DesignParameter> parameters; ///< in order of first use
-  std::vector<DesignedLeaf> leaves;        ///< each leaf of `fitted` once, in tree order
-  std::vector<DesignedPattern> patterns;   ///< patterns found
-  double noise = 0.0;                      ///< σ of the points about the fitted tree (0: none)
-  double iouToFitted = 1.0;                ///< voxel IoU of the designed tree against the fitted
-  double meanDistanceFitted = 0.0;         ///< points' mean |f| to the fitted tree (0: no points)
-  double meanDistanceDesigned = 0.0;       ///< points' mean |f| to the designed tree
+  std::vector<DesignParameter> parameters;    ///< in order of first use
+  std::vector<DesignedLeaf> leaves;           ///< each leaf of `fitted` once, in tree order
+  std::vector<DesignedPattern> patterns;      ///< patterns found
+  double noise = 0.0;                         ///< σ of the points about the fitted tree (0: none)
+  double iouToFitted = 1.0;                   ///< voxel IoU of the designed tree against the fitted
+  double meanDistanceFitted = 0.0;    ///< points' mean |f| to the fitted tree (0: no points)
+  double meanDistanceDesigned = 0.0;  ///< points' mean |f| to the designed tree
 
   /// The designed tree in world coordinates (the fitted tree's structure,
   /// every leaf realised from the parameters' values and named as its
@@ -170,7 +170,7 @@ struct DesignedTree {
 DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> points = {},
                         const DesignOptions& options = {});
 /// The same in a given frame (e.g. the one tree.json records).
-DesignedTree designTree(const CsgTree& fitted, const PartFrame& frame,
-                        std::span<const Vec3> points, const DesignOptions& options = {});
+DesignedTree designTree(const CsgTree& fitted, const PartFrame& frame, std::span<const Vec3> points,
+                        const DesignOptions& options = {});
 
 }  // namespace csgvox

@@ -70,8 +70,7 @@ void addVote(std::vector<Vote>& votes, const Vec3& d, double w, bool axial, doub
   votes.push_back({d.normalized(), w, axial});
 }
 
-std::vector<Vote> directionVotes(const CsgTree& tree, std::span<const Vec3> points,
-                                 double cosTol) {
+std::vector<Vote> directionVotes(const CsgTree& tree, std::span<const Vec3> points, double cosTol) {
   std::vector<Vote> votes;
   const std::vector<const Node*> leaves = uniqueLeaves(tree);
   if (!points.empty()) {
@@ -181,7 +180,8 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
   double total = 0.0;
   for (const Vote& v : votes) total += v.weight;
   Vec3 z = Vec3::UnitZ();
-  const auto axial = std::find_if(votes.begin(), votes.end(), [](const Vote& v) { return v.axial; });
+  const auto axial =
+      std::find_if(votes.begin(), votes.end(), [](const Vote& v) { return v.axial; });
   if (axial != votes.end()) {
     z = axial->direction;
   } else if (!votes.empty()) {

@@ -15,7 +15,8 @@ namespace csgvox {
 struct PartFrame {
   Mat3 rotation = Mat3::Identity();  ///< columns: the frame's x, y, z axes in world coordinates
   Vec3 origin = Vec3::Zero();        ///< the frame's origin in world coordinates
-  bool spinFree = false;  ///< no face of the part fixes x (a turned part): any turn about z is as good
+  bool spinFree =
+      false;  ///< no face of the part fixes x (a turned part): any turn about z is as good
 
   /// World coordinates of a point given in the frame.
   Vec3 toWorld(const Vec3& local) const { return rotation * local + origin; }

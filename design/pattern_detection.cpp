@@ -50,16 +50,19 @@ Primitive shapeKey(const Primitive& p, bool loose) {
 
 bool alongZ(const Primitive& p, double tol) {
   Vec3 axis;
-  if (const auto* c = p.as<Cylinder>()) axis = c->axis;
-  else if (const auto* c = p.as<Cone>()) axis = c->axis;
-  else if (const auto* t = p.as<Torus>()) axis = t->axis;
-  else return p.type() == PrimitiveType::Sphere;
+  if (const auto* c = p.as<Cylinder>())
+    axis = c->axis;
+  else if (const auto* c = p.as<Cone>())
+    axis = c->axis;
+  else if (const auto* t = p.as<Torus>())
+    axis = t->axis;
+  else
+    return p.type() == PrimitiveType::Sphere;
   return std::abs(axis.x()) <= tol && std::abs(axis.y()) <= tol;
 }
 
 bool circular(const std::vector<int>& group, std::span<const PatternCandidate> prims,
-              const std::vector<Vec3>& pos, double tol,
-              FoundPattern& out) {
+              const std::vector<Vec3>& pos, double tol, FoundPattern& out) {
   const int n = int(group.size());
   if (n < 3) return false;
   Vec3 m = Vec3::Zero();
@@ -136,8 +139,7 @@ bool evenlySpaced(const std::vector<double>& v, double tol) {
 }
 
 bool lattice(const std::vector<int>& group, std::span<const PatternCandidate>,
-              const std::vector<Vec3>& pos, double tol,
-             FoundPattern& out) {
+             const std::vector<Vec3>& pos, double tol, FoundPattern& out) {
   const int n = int(group.size());
   if (n < 4) return false;
   std::array<std::vector<double>, 3> lv;
@@ -158,8 +160,10 @@ bool lattice(const std::vector<int>& group, std::span<const PatternCandidate>,
   for (int i : group) {
     const Vec3 c = pos[std::size_t(i)];
     int ia = -1, ib = -1;
-    for (int k = 0; k < na; ++k) if (std::abs(c[a] - lv[a][k]) <= tol) ia = k;
-    for (int k = 0; k < nb; ++k) if (std::abs(c[b] - lv[b][k]) <= tol) ib = k;
+    for (int k = 0; k < na; ++k)
+      if (std::abs(c[a] - lv[a][k]) <= tol) ia = k;
+    for (int k = 0; k < nb; ++k)
+      if (std::abs(c[b] - lv[b][k]) <= tol) ib = k;
     if (ia < 0 || ib < 0 || members[std::size_t(ia + na * ib)] >= 0) return false;
     members[std::size_t(ia + na * ib)] = i;
   }
@@ -175,8 +179,7 @@ bool lattice(const std::vector<int>& group, std::span<const PatternCandidate>,
 }
 
 bool row(const std::vector<int>& group, std::span<const PatternCandidate>,
-              const std::vector<Vec3>& pos, double tol,
-         FoundPattern& out) {
+         const std::vector<Vec3>& pos, double tol, FoundPattern& out) {
   const int n = int(group.size());
   if (n < 2) return false;
   // Along the line through the two farthest members, in order.
@@ -184,8 +187,9 @@ bool row(const std::vector<int>& group, std::span<const PatternCandidate>,
   double far = -1.0;
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j) {
-      const double d = (pos[std::size_t(group[std::size_t(j)])] -
-                        pos[std::size_t(group[std::size_t(i)])]).norm();
+      const double d =
+          (pos[std::size_t(group[std::size_t(j)])] - pos[std::size_t(group[std::size_t(i)])])
+              .norm();
       if (d > far + tol) {
         far = d;
         p = i;
@@ -266,7 +270,9 @@ std::vector<FoundPattern> findPatterns(std::span<const PatternCandidate> primiti
     FoundPattern p;
     // Loose and firm lengths do not mix in one pattern.
     bool mixed = false;
-    for (int i : group) mixed = mixed || primitives[std::size_t(i)].looseLength != primitives[std::size_t(group.front())].looseLength;
+    for (int i : group)
+      mixed = mixed || primitives[std::size_t(i)].looseLength !=
+                           primitives[std::size_t(group.front())].looseLength;
     if (mixed) continue;
     if (circular(group, primitives, pos, tol, p) || lattice(group, primitives, pos, tol, p) ||
         row(group, primitives, pos, tol, p)) {

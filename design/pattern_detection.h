@@ -17,14 +17,14 @@ enum class FoundPatternKind { Circular, Lattice, Row };
 /// A pattern among the primitives given to findPatterns().
 struct FoundPattern {
   FoundPatternKind kind = FoundPatternKind::Row;  ///< how the members repeat
-  std::vector<int> members;     ///< indices into the input; member i (Lattice: i + count·j)
-  Vec3 center = Vec3::Zero();   ///< Circular: a point of the axis (z of the members)
-  double radius = 0.0;          ///< Circular: distance of the members from the axis
-  double phase = 0.0;           ///< Circular: angle of member 0 from x, degrees in [0, 360/n)
-  Vec3 step = Vec3::Zero();     ///< Row, Lattice: offset of member i+1 from member i
-  Vec3 step2 = Vec3::Zero();    ///< Lattice: offset between rows
-  int count = 0;                ///< members (Lattice: along step)
-  int count2 = 1;               ///< Lattice: rows
+  std::vector<int> members;    ///< indices into the input; member i (Lattice: i + count·j)
+  Vec3 center = Vec3::Zero();  ///< Circular: a point of the axis (z of the members)
+  double radius = 0.0;         ///< Circular: distance of the members from the axis
+  double phase = 0.0;          ///< Circular: angle of member 0 from x, degrees in [0, 360/n)
+  Vec3 step = Vec3::Zero();    ///< Row, Lattice: offset of member i+1 from member i
+  Vec3 step2 = Vec3::Zero();   ///< Lattice: offset between rows
+  int count = 0;               ///< members (Lattice: along step)
+  int count2 = 1;              ///< Lattice: rows
 };
 
 /// Options of findPatterns().
@@ -34,9 +34,9 @@ struct PatternOptions {
 
 /// One primitive as findPatterns() sees it.
 struct PatternCandidate {
-  Primitive primitive;      ///< in frame coordinates
-  bool looseLength = false; ///< a cylinder whose caps nothing holds (a cutter past the part):
-                            ///< its height and its position along its axis are not compared
+  Primitive primitive;       ///< in frame coordinates
+  bool looseLength = false;  ///< a cylinder whose caps nothing holds (a cutter past the part):
+                             ///< its height and its position along its axis are not compared
 };
 
 /// Patterns among `primitives` (frame coordinates): groups of primitives

@@ -12,15 +12,15 @@ namespace csgvox {
 
 /// Options of pointSupport().
 struct SupportOptions {
-  double band = 3.0;          ///< a point lies on a surface within this many noise deviations
-  double noiseFloor = 1e-6;   ///< least noise deviation, fraction of the points' diagonal
+  double band = 3.0;         ///< a point lies on a surface within this many noise deviations
+  double noiseFloor = 1e-6;  ///< least noise deviation, fraction of the points' diagonal
 };
 
 /// The points of a scan on the leaves of a tree.
 struct PointSupport {
-  double noise = 0.0;                ///< robust deviation of the tree's field at the points, scan units
-  std::vector<const Node*> leaf;     ///< per point: the leaf whose surface it lies on, or nullptr
-  std::vector<Vec3> gradient;        ///< per point: that leaf's field gradient there (inward normal)
+  double noise = 0.0;  ///< robust deviation of the tree's field at the points, scan units
+  std::vector<const Node*> leaf;  ///< per point: the leaf whose surface it lies on, or nullptr
+  std::vector<Vec3> gradient;     ///< per point: that leaf's field gradient there (inward normal)
   /// True when there are no points (the tree alone is known).
   bool empty() const { return leaf.empty(); }
 };

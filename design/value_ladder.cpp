@@ -10,8 +10,8 @@ namespace {
 
 constexpr double kInch = 25.4;
 constexpr std::array<double, 4> kMillimetreSteps = {1.0, 0.5, 0.1, 0.01};
-constexpr std::array<double, 6> kInchSteps = {kInch,      kInch / 2,  kInch / 4,
-                                              kInch / 8,  kInch / 16, kInch / 32};
+constexpr std::array<double, 6> kInchSteps = {kInch,     kInch / 2,  kInch / 4,
+                                              kInch / 8, kInch / 16, kInch / 32};
 constexpr std::array<double, 6> kAngleSteps = {90.0, 45.0, 30.0, 15.0, 5.0, 1.0};
 
 std::span<const double> stepsOf(UnitSystem units) {
@@ -41,9 +41,7 @@ std::optional<double> onLadder(double value, double uncertainty, std::span<const
 
 }  // namespace
 
-std::string unitSystemName(UnitSystem units) {
-  return units == UnitSystem::Inch ? "inch" : "mm";
-}
+std::string unitSystemName(UnitSystem units) { return units == UnitSystem::Inch ? "inch" : "mm"; }
 
 std::optional<double> simplestLength(double value, double uncertainty, UnitSystem units) {
   return onLadder(value, uncertainty, stepsOf(units));

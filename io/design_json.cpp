@@ -106,7 +106,8 @@ std::optional<PartFrame> readTreeFrame(const std::filesystem::path& path) {
       for (int i = 0; i < 3; ++i) frame.rotation(i, c) = f.at("axes").at(c).at(i).get<double>();
     const double error = (frame.rotation.transpose() * frame.rotation - Mat3::Identity()).norm();
     if (!(error < 1e-9) || !(frame.rotation.determinant() > 0.0) || !frame.origin.allFinite()) {
-      throw ParseError(path.string() + ": \"frame\": axes are not a right-handed orthonormal frame");
+      throw ParseError(path.string() +
+                       ": \"frame\": axes are not a right-handed orthonormal frame");
     }
     return frame;
   } catch (const nlohmann::json::exception& e) {

@@ -110,11 +110,13 @@ struct DesignWriter {
           const Torus& t = *p.as<Torus>();
           return "translate([" + pos[0] + ", " + pos[1] + ", " + pos[2] + "]) " + turn +
                  "rotate_extrude(" + fn(t.majorRadius + t.minorRadius, options.surfaceCoarsening) +
-                 ") translate([" + e(l.radius) + ", 0]) circle(r = " + grown(l.radius2, "+") + ", " +
-                 fn(t.minorRadius, options.surfaceCoarsening, options.minTubeSegments) + ");";
+                 ") translate([" + e(l.radius) + ", 0]) circle(r = " + grown(l.radius2, "+") +
+                 ", " + fn(t.minorRadius, options.surfaceCoarsening, options.minTubeSegments) +
+                 ");";
         }
         pos[a] = grown(l.lo[std::size_t(a)], "-");
-        const std::string place = "translate([" + pos[0] + ", " + pos[1] + ", " + pos[2] + "]) " + turn;
+        const std::string place =
+            "translate([" + pos[0] + ", " + pos[1] + ", " + pos[2] + "]) " + turn;
         const std::string h = "h = " + width(l.lo[std::size_t(a)], l.hi[std::size_t(a)]);
         if (l.type == PrimitiveType::Cylinder) {
           return place + "cylinder(" + h + ", r = " + grown(l.radius, "+") + ", " +
@@ -129,16 +131,17 @@ struct DesignWriter {
                fn(std::max(c.radiusBottom, c.radiusTop)) + ");";
       }
       case LeafForm::Sphere:
-        return "translate([" + at(0) + ", " + at(1) + ", " + at(2) + "]) sphere(r = " +
-               grown(l.radius, "+") + ", " + fn(p.as<Sphere>()->radius, options.surfaceCoarsening) +
-               ");";
+        return "translate([" + at(0) + ", " + at(1) + ", " + at(2) +
+               "]) sphere(r = " + grown(l.radius, "+") + ", " +
+               fn(p.as<Sphere>()->radius, options.surfaceCoarsening) + ");";
       case LeafForm::AlignedHalfSpace:
         return l.flipped ? "block_above(" + std::to_string(l.axis) + ", " +
                                grown(l.lo[std::size_t(l.axis)], "-") + ");"
                          : "block_below(" + std::to_string(l.axis) + ", " +
                                grown(l.hi[std::size_t(l.axis)], "+") + ");";
       case LeafForm::TiltedHalfSpace:
-        return "plane_below(" + e(l.angle) + ", " + e(l.angle2) + ", " + grown(l.radius, "+") + ");";
+        return "plane_below(" + e(l.angle) + ", " + e(l.angle2) + ", " + grown(l.radius, "+") +
+               ");";
       case LeafForm::Free:
         break;
     }
@@ -168,8 +171,8 @@ struct DesignWriter {
     }
     if (const auto* c = p.as<Cone>()) {
       return place(frameFromAxis(c->axis), c->center) + "cylinder(h = " + formatNumber(c->height) +
-             " + 2 * g, r1 = " + formatNumber(c->radiusBottom) + " + g, r2 = " +
-             formatNumber(c->radiusTop) + " + g, center = true, " +
+             " + 2 * g, r1 = " + formatNumber(c->radiusBottom) +
+             " + g, r2 = " + formatNumber(c->radiusTop) + " + g, center = true, " +
              fn(std::max(c->radiusBottom, c->radiusTop)) + ");";
     }
     if (const auto* t = p.as<Torus>()) {
@@ -259,14 +262,16 @@ void writeDesignedScad(std::ostream& out, const DesignedTree& d, const ScadOptio
   const Vec3 euler = d.frame.eulerDegrees();
   const bool unturned = d.frame.rotation == Mat3::Identity();  // no rotation to write
   if (!d.frame.isIdentity()) {
-    out << "\n// The part's frame in the scan: its primitives are drawn in the frame, then placed.\n"
+    out << "\n// The part's frame in the scan: its primitives are drawn in the frame, then "
+           "placed.\n"
         << "frame_origin = " << formatVector(d.frame.origin) << ";\n";
     if (!unturned) {
       out << "frame_rotation = " << formatVector(euler) << ";  // degrees about x, y, z\n";
     }
   }
   out << "\n// ---- drawing\n"
-      << "// Curved primitives are polygons of segments(n) sides; raise detail for a finer render.\n"
+      << "// Curved primitives are polygons of segments(n) sides; raise detail for a finer "
+         "render.\n"
       << "detail = 1;\n"
       << "function segments(n) = max(3, round(n * detail));\n"
       << "overcut = " << formatNumber(overcut)
@@ -280,7 +285,8 @@ void writeDesignedScad(std::ostream& out, const DesignedTree& d, const ScadOptio
       << "module block_above(axis, at) translate([for (k = [0 : 2]) k == axis ? at : "
          "part_center[k] - big / 2]) cube(big);\n"
       << "module everything() translate(part_center - [big, big, big] / 2) cube(big);\n"
-      << "// The half-space normal·x <= at, its normal tilted from z, then turned about z (degrees).\n"
+      << "// The half-space normal·x <= at, its normal tilted from z, then turned about z "
+         "(degrees).\n"
       << "module plane_below(tilt, turn, at) rotate([0, 0, turn]) rotate([0, tilt, 0]) "
          "translate([-big, -big, at - 2 * big]) cube(2 * big);\n\n";
   out << kBodyMarker << " (g: how much a cutter grows)\n";
@@ -294,7 +300,8 @@ void writeDesignedScad(std::ostream& out, const DesignedTree& d, const ScadOptio
   out << "\n// ---- the part\n";
   int indent = 0;
   if (!d.frame.isIdentity()) {
-    out << (unturned ? "translate(frame_origin) {\n" : "translate(frame_origin) rotate(frame_rotation) {\n");
+    out << (unturned ? "translate(frame_origin) {\n"
+                     : "translate(frame_origin) rotate(frame_rotation) {\n");
     indent = 1;
   }
   w.node(*d.fitted.root(), indent, false);
@@ -333,7 +340,8 @@ ScadLiteralCount countScadLiterals(const std::string& program) {
   const std::regex token(R"([A-Za-z_$][A-Za-z0-9_]*|\d+\.?\d*(?:[eE][-+]?\d+)?)");
   const std::set<std::string> structural = {"0", "1", "2", "360"};
   const std::set<std::string> drawing = {"overcut", "big", "part_center", "detail", "g", "i", "j"};
-  for (auto it = std::sregex_iterator(body.begin(), body.end(), token); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(body.begin(), body.end(), token);
+       it != std::sregex_iterator(); ++it) {
     const std::string t = it->str();
     if (std::isdigit(static_cast<unsigned char>(t[0]))) {
       if (!structural.count(t)) ++c.numbers;

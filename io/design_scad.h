@@ -28,8 +28,8 @@ void writeDesignedScad(const std::filesystem::path& path, const DesignedTree& de
 /// a number in `segments(...)` or one of 0, 1, 2 and 360 (structure, not
 /// dimensions) does not count. For tests and reports.
 struct ScadLiteralCount {
-  int numbers = 0;    ///< dimension values in the body
-  int parameters = 0; ///< of them, written as parameters or expressions
+  int numbers = 0;     ///< dimension values in the body
+  int parameters = 0;  ///< of them, written as parameters or expressions
 };
 /// Counts the body's literals of an OpenSCAD program written by csgvox
 /// (either writer): numbers left as literals count against.

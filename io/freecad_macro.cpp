@@ -94,8 +94,12 @@ struct MacroWriter {
     switch (l.form) {
       case LeafForm::AlignedBox:
         feature("Part::Box", name, Vec3::UnitZ(), 0.0,
-                {{"Length", width(0)}, {"Width", width(1)}, {"Height", width(2)}, base(0, low(0)),
-                 base(1, low(1)), base(2, low(2))});
+                {{"Length", width(0)},
+                 {"Width", width(1)},
+                 {"Height", width(2)},
+                 base(0, low(0)),
+                 base(1, low(1)),
+                 base(2, low(2))});
         return;
       case LeafForm::TurnedBox: {
         const std::string t = p(l.angle);
@@ -138,19 +142,20 @@ struct MacroWriter {
         return;
       }
       case LeafForm::Sphere:
-        feature("Part::Sphere", name, Vec3::UnitZ(), 0.0,
-                {{"Radius", p(l.radius) + " + " + g}, base(0, at(0)), base(1, at(1)),
-                 base(2, at(2))});
+        feature(
+            "Part::Sphere", name, Vec3::UnitZ(), 0.0,
+            {{"Radius", p(l.radius) + " + " + g}, base(0, at(0)), base(1, at(1)), base(2, at(2))});
         return;
       case LeafForm::AlignedHalfSpace: {
         const int a = l.axis;
-        std::vector<std::pair<std::string, std::string>> props = {
-            {"Length", "Parameters.big"}, {"Width", "Parameters.big"}, {"Height", "Parameters.big"}};
+        std::vector<std::pair<std::string, std::string>> props = {{"Length", "Parameters.big"},
+                                                                  {"Width", "Parameters.big"},
+                                                                  {"Height", "Parameters.big"}};
         for (int k = 0; k < 3; ++k) {
           if (k == a) {
-            props.push_back(base(k, l.flipped ? p(l.lo[std::size_t(a)]) + " - " + g
-                                              : p(l.hi[std::size_t(a)]) + " + " + g +
-                                                    " - Parameters.big"));
+            props.push_back(
+                base(k, l.flipped ? p(l.lo[std::size_t(a)]) + " - " + g
+                                  : p(l.hi[std::size_t(a)]) + " + " + g + " - Parameters.big"));
           } else {
             props.push_back(base(k, formatNumber(center[k]) + " - Parameters.big / 2"));
           }
@@ -236,7 +241,8 @@ struct MacroWriter {
     const std::string name = std::string(nodeKindName(n.kind)) + "_" + std::to_string(++operations);
     const auto list = [&](std::size_t from) {
       std::string s = "[";
-      for (std::size_t i = from; i < children.size(); ++i) s += (i > from ? ", " : "") + children[i];
+      for (std::size_t i = from; i < children.size(); ++i)
+        s += (i > from ? ", " : "") + children[i];
       return s + "]";
     };
     switch (n.kind) {

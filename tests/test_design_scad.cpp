@@ -22,9 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-CsgTree part(const std::string& name) {
-  return readTreeJson(test::dataDir() / name / "tree.json");
-}
+CsgTree part(const std::string& name) { return readTreeJson(test::dataDir() / name / "tree.json"); }
 
 std::string designedScad(const DesignedTree& d) {
   std::ostringstream out;
@@ -56,11 +54,17 @@ TEST(DesignScad, FlangeHasAParameterBlockAndOneLoop) {
   EXPECT_EQ(std::count(scad.begin(), scad.end(), '\n') > 0, true);
   // One loop; one hole module for the six holes.
   const std::regex loop(R"(for \(i = \[0 : bolt_circle_count - 1\]\))");
-  EXPECT_EQ(std::distance(std::sregex_iterator(scad.begin(), scad.end(), loop), std::sregex_iterator()), 1);
+  EXPECT_EQ(
+      std::distance(std::sregex_iterator(scad.begin(), scad.end(), loop), std::sregex_iterator()),
+      1);
   const std::regex holes(R"(module hole_\d+\(g = 0\))");
-  EXPECT_EQ(std::distance(std::sregex_iterator(scad.begin(), scad.end(), holes), std::sregex_iterator()), 1);
+  EXPECT_EQ(
+      std::distance(std::sregex_iterator(scad.begin(), scad.end(), holes), std::sregex_iterator()),
+      1);
   const std::regex modules(R"(module (plate|hub|bore|fillet)\w*\(g = 0\))");
-  EXPECT_GE(std::distance(std::sregex_iterator(scad.begin(), scad.end(), modules), std::sregex_iterator()), 4);
+  EXPECT_GE(std::distance(std::sregex_iterator(scad.begin(), scad.end(), modules),
+                          std::sregex_iterator()),
+            4);
 }
 
 // Of the numbers in the body, most are parameters or expressions on every

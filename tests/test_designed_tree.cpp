@@ -41,7 +41,8 @@ CsgTree perturbed(const CsgTree& tree, double noise, unsigned seed) {
               if constexpr (std::is_same_v<T, Box>) s.halfSize += Vec3(u(rng), u(rng), u(rng));
               if constexpr (std::is_same_v<T, Cylinder>) s.radius += u(rng), s.height += u(rng);
               if constexpr (std::is_same_v<T, Sphere>) s.radius += u(rng);
-              if constexpr (std::is_same_v<T, Torus>) s.majorRadius += u(rng), s.minorRadius += u(rng);
+              if constexpr (std::is_same_v<T, Torus>)
+                s.majorRadius += u(rng), s.minorRadius += u(rng);
               if constexpr (std::is_same_v<T, Cone>) {
                 s.radiusBottom += s.radiusBottom > 0 ? u(rng) : 0.0;
                 s.radiusTop += s.radiusTop > 0 ? u(rng) : 0.0;
@@ -61,7 +62,6 @@ CsgTree perturbed(const CsgTree& tree, double noise, unsigned seed) {
   };
   return CsgTree(walk(tree.root()));
 }
-
 
 // Parameter name -> designed value.
 std::map<std::string, double> valuesOf(const DesignedTree& d) {
@@ -147,7 +147,7 @@ TEST(DesignedTree, BundledPartsKeepTheirRadiiExactly) {
     const DesignedTree d = designTree(perturbed(truth, 1e-5, 4), {}, o);
     EXPECT_GE(d.iouToFitted, 0.999);
     for (const Node* leaf : truth.leaves()) {
-      if (!onGrid(leaf->primitive.as<Cylinder>()   ? leaf->primitive.as<Cylinder>()->radius
+      if (!onGrid(leaf->primitive.as<Cylinder>() ? leaf->primitive.as<Cylinder>()->radius
                   : leaf->primitive.as<Sphere>() ? leaf->primitive.as<Sphere>()->radius
                                                  : 0.0)) {
         continue;

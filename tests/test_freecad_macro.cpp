@@ -45,7 +45,8 @@ std::string point(const Vec3& p) {
 }
 
 TEST_F(FreecadMacro, BuildsEveryPartAndFollowsTheSheet) {
-  if (!haveFreecad()) GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
+  if (!haveFreecad())
+    GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
   if (!stepExportAvailable()) GTEST_SKIP() << "built without OpenCASCADE (CSGVOX_WITH_OCCT=OFF)";
   std::ofstream list(dir_ / "parts.txt");
   std::size_t parts = 0;
