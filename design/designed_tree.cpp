@@ -535,7 +535,9 @@ class Designer {
     if (affected.empty()) return 1.0;
     region = region.grown(1e-9 * diagonal_);
     const CsgTree tree = d_.localTree();
-    // IoU: only grid points in the region can change.
+    // IoU: only grid points in the region can change, and of them only those
+    // where a changed primitive changes side (inside or outside the tree is
+    // a function of the leaves' sides).
     std::vector<Vec3> pts;
     std::vector<std::size_t> idx;
     for (std::size_t i = 0; i < grid.points.size(); ++i) {
@@ -544,11 +546,28 @@ class Designer {
         idx.push_back(i);
       }
     }
-    std::vector<double> f(pts.size());
-    tree.values(pts, f);
-    long inter = grid.fittedCount, uni = grid.fittedCount;
+    std::vector<char> flips(pts.size(), 0);
+    std::vector<double> before(pts.size()), after(pts.size());
+    for (int i : affected) {
+      d_.leaves[std::size_t(i)].local.values(pts, before);
+      d_.localPrimitive(i).values(pts, after);
+      for (std::size_t k = 0; k < pts.size(); ++k) {
+        flips[k] = flips[k] || ((before[k] >= 0.0) != (after[k] >= 0.0));
+      }
+    }
+    std::vector<Vec3> flipped;
+    std::vector<std::size_t> flippedIdx;
     for (std::size_t k = 0; k < pts.size(); ++k) {
-      const bool a = grid.fittedInside[idx[k]], b = f[k] >= 0.0;
+      if (flips[k]) {
+        flipped.push_back(pts[k]);
+        flippedIdx.push_back(idx[k]);
+      }
+    }
+    std::vector<double> f(flipped.size());
+    tree.values(flipped, f);
+    long inter = grid.fittedCount, uni = grid.fittedCount;
+    for (std::size_t k = 0; k < flipped.size(); ++k) {
+      const bool a = grid.fittedInside[flippedIdx[k]], b = f[k] >= 0.0;
       inter += (a && b) - a;
       uni += (a || b) - a;
     }
