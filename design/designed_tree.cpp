@@ -1,6 +1,7 @@
 #include "design/designed_tree.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -116,6 +117,7 @@ class Designer {
     if (reshape) findLeafPatterns();
     makeSlots();
     groupSlots();
+    prepare();
     if (reshape && !keepsShape()) {
       return Designer(d_.fitted, d_.frame, points_, options_).run(false);
     }
@@ -210,24 +212,12 @@ class Designer {
     return std::max(b.halfSize.maxCoeff(), 1e-12);
   }
 
-  // A cylinder that only cuts and whose caps no point holds (it goes
-  // through): its length past the part is free.
-  bool looseCaps(int i) {
-    DesignedLeaf& l = d_.leaves[std::size_t(i)];
-    if (localPoints_.empty() || l.type != PrimitiveType::Cylinder || l.form != LeafForm::Axial ||
-        l.adds || !l.cuts) {
-      return false;
-    }
-    const std::vector<LeafField> fields = leafFields(l);
-    const std::vector<double> n = fieldSupport(l, fields, gradients_[std::size_t(i)]);
-    for (std::size_t k = 0; k < fields.size(); ++k) {
-      if ((fields[k].expression == &l.lo[std::size_t(l.axis)] ||
-           fields[k].expression == &l.hi[std::size_t(l.axis)]) &&
-          n[k] > 0.0) {
-        return false;
-      }
-    }
-    return true;
+  // A cylinder that only cuts: its length is compared with no other (a
+  // hole's ends past the part are free; a pattern whose members' caps differ
+  // where it matters fails the shape test and is dropped).
+  bool looseCaps(int i) const {
+    const DesignedLeaf& l = d_.leaves[std::size_t(i)];
+    return l.type == PrimitiveType::Cylinder && l.form == LeafForm::Axial && !l.adds && l.cuts;
   }
 
   int addSlot(ValueCategory c, double value, double support, const std::string& name, int leaf,
@@ -308,6 +298,7 @@ class Designer {
       }
     }
     double crossSupport = 0.0;
+    std::array<double, 3> stepSupport = {0.0, 0.0, 0.0};  // points placing the members per axis
     for (std::size_t k = 0; k < fields.front().size(); ++k) {
       const LeafField& f0 = fields.front()[k];
       double sum = 0.0, n_k = 0.0;
@@ -320,6 +311,10 @@ class Designer {
         }
         sum += value;
         n_k += support[std::size_t(i)][k];
+      }
+      if (f0.positionAxis >= 0) {
+        stepSupport[std::size_t(f0.positionAxis)] =
+            std::max(stepSupport[std::size_t(f0.positionAxis)], n_k);
       }
       if (f.kind == FoundPatternKind::Circular && f0.crossPosition) {
         crossSupport += n_k / 2;
@@ -334,8 +329,7 @@ class Designer {
       slots_[std::size_t(slot)].owner = p.name;
       return Expression::of(slot);
     };
-    countSlots_.push_back(addSlot(ValueCategory::Count, f.count, kInf, p.name + "_count", -1));
-    p.count = countSlots_.back();
+    p.count = addSlot(ValueCategory::Count, f.count, kInf, p.name + "_count", -1);
     slots_[std::size_t(p.count)].owner = p.name;
     if (p.kind == PatternKind::Circular) {
       p.centerX =
@@ -349,18 +343,18 @@ class Designer {
       for (int a = 0; a < 3; ++a) {
         const double tol = options_.patternTolerance * diagonal_;
         if (std::abs(f.step[a]) > tol) {
-          p.step[std::size_t(a)] = own(
-              addSlot(ValueCategory::Step, f.step[a], kInf, p.name + "_d" + kAxisLetter[a], -1));
+          p.step[std::size_t(a)] =
+              own(addSlot(ValueCategory::Step, f.step[a], stepSupport[std::size_t(a)],
+                          p.name + "_d" + kAxisLetter[a], -1));
         }
         if (std::abs(f.step2[a]) > tol) {
-          p.step2[std::size_t(a)] = own(
-              addSlot(ValueCategory::Step, f.step2[a], kInf, p.name + "_d" + kAxisLetter[a], -1));
+          p.step2[std::size_t(a)] =
+              own(addSlot(ValueCategory::Step, f.step2[a], stepSupport[std::size_t(a)],
+                          p.name + "_d" + kAxisLetter[a], -1));
         }
       }
       if (p.kind == PatternKind::Lattice) {
-        countSlots_.push_back(
-            addSlot(ValueCategory::Count, f.count2, kInf, p.name + "_count2", -1));
-        p.count2 = countSlots_.back();
+        p.count2 = addSlot(ValueCategory::Count, f.count2, kInf, p.name + "_count2", -1);
         slots_[std::size_t(p.count2)].owner = p.name;
       }
     }
@@ -506,51 +500,82 @@ class Designer {
     return out;
   }
 
-  // A pattern shares its members' values (their means), a cone's free cap
-  // slides: the tree must keep its shape with them.
-  bool keepsShape() {
+  // The fitted tree's inside flags on the grid and its points' distances,
+  // then the unsnapped designed tree's (patterns and slid caps in it) as
+  // the baseline that each snap is measured from.
+  void prepare() {
     grid_ = iouGrid(local_, options_.iouResolution);
-    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_, true);
-    std::vector<int> all(d_.parameters.size());
-    for (std::size_t i = 0; i < all.size(); ++i) all[i] = int(i);
-    return check(all) >= 0.0;
+    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_, &baseAbs_);
+    basePrims_.clear();
+    for (std::size_t i = 0; i < d_.leaves.size(); ++i)
+      basePrims_.push_back(d_.localPrimitive(int(i)));
+    const CsgTree base = d_.localTree();
+    std::vector<double> f(grid_.points.size());
+    base.values(grid_.points, f);
+    baseInside_.resize(f.size());
+    baseInter_ = baseUnion_ = 0;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      baseInside_[i] = f[i] >= 0.0;
+      baseInter_ += grid_.fittedInside[i] && baseInside_[i];
+      baseUnion_ += grid_.fittedInside[i] || baseInside_[i];
+    }
+    if (!localPoints_.empty()) baseDesignedDistance_ = meanDistance(base, &baseDesignedAbs_);
   }
 
-  // The test a set of values must pass: valid primitives, IoU against the
-  // fitted tree, the points' mean distance. Returns the IoU (-1: fails).
-  double check(const std::vector<int>& changed) {
-    const IouGrid& grid = grid_;
+  // A pattern shares its members' values (their means), a cone's free cap
+  // slides: the tree must keep its shape with them.
+  bool keepsShape() const {
+    const double iou = baseUnion_ > 0 ? double(baseInter_) / double(baseUnion_) : 1.0;
+    for (const Primitive& p : basePrims_) {
+      if (!validPrimitive(p)) return false;
+    }
+    return iou >= options_.minIou && fitsPoints(baseDesignedDistance_);
+  }
+
+  bool fitsPoints(double meanDistance) const {
+    if (localPoints_.empty()) return true;
+    const double noise = std::max(d_.noise, options_.minNoise * diagonal_);
+    return meanDistance <= baseDistance_ + options_.fitnessSlack * noise;
+  }
+
+  // The test a set of changed values must pass: valid primitives, IoU against
+  // the fitted tree, the points' mean distance. Returns the IoU (-1: fails).
+  // Measured from the baseline: only the leaves the values change are
+  // evaluated, on the grid points where one of them changes side (inside or
+  // outside the tree is a function of the leaves' sides), and on the points
+  // near them (2 % of D: the others keep their distance).
+  double check(const std::vector<int>& changed) const {
     std::set<int> affected;
     for (int p : changed) {
       const std::set<int> l = leavesOf(p);
       affected.insert(l.begin(), l.end());
     }
     Aabb region;
+    std::vector<std::pair<const Primitive*, Primitive>> moved;
     for (int i : affected) {
-      const Primitive now = d_.localPrimitive(i);
+      Primitive now = d_.localPrimitive(i);
       if (!validPrimitive(now)) return -1.0;
       region.extend(now.bounds());
-      region.extend(d_.leaves[std::size_t(i)].local.bounds());
+      region.extend(basePrims_[std::size_t(i)].bounds());
+      moved.emplace_back(&basePrims_[std::size_t(i)], std::move(now));
     }
-    if (affected.empty()) return 1.0;
+    if (affected.empty()) {
+      return baseUnion_ > 0 ? double(baseInter_) / double(baseUnion_) : 1.0;
+    }
     region = region.grown(1e-9 * diagonal_);
-    const CsgTree tree = d_.localTree();
-    // IoU: only grid points in the region can change, and of them only those
-    // where a changed primitive changes side (inside or outside the tree is
-    // a function of the leaves' sides).
     std::vector<Vec3> pts;
     std::vector<std::size_t> idx;
-    for (std::size_t i = 0; i < grid.points.size(); ++i) {
-      if (region.contains(grid.points[i])) {
-        pts.push_back(grid.points[i]);
+    for (std::size_t i = 0; i < grid_.points.size(); ++i) {
+      if (region.contains(grid_.points[i])) {
+        pts.push_back(grid_.points[i]);
         idx.push_back(i);
       }
     }
     std::vector<char> flips(pts.size(), 0);
     std::vector<double> before(pts.size()), after(pts.size());
-    for (int i : affected) {
-      d_.leaves[std::size_t(i)].local.values(pts, before);
-      d_.localPrimitive(i).values(pts, after);
+    for (const auto& [base, now] : moved) {
+      base->values(pts, before);
+      now.values(pts, after);
       for (std::size_t k = 0; k < pts.size(); ++k) {
         flips[k] = flips[k] || ((before[k] >= 0.0) != (after[k] >= 0.0));
       }
@@ -563,41 +588,52 @@ class Designer {
         flippedIdx.push_back(idx[k]);
       }
     }
+    const CsgTree tree = d_.localTree();
     std::vector<double> f(flipped.size());
     tree.values(flipped, f);
-    long inter = grid.fittedCount, uni = grid.fittedCount;
+    long inter = baseInter_, uni = baseUnion_;
     for (std::size_t k = 0; k < flipped.size(); ++k) {
-      const bool a = grid.fittedInside[flippedIdx[k]], b = f[k] >= 0.0;
-      inter += (a && b) - a;
-      uni += (a || b) - a;
+      const bool a = grid_.fittedInside[flippedIdx[k]], b0 = baseInside_[flippedIdx[k]],
+                 b = f[k] >= 0.0;
+      inter += (a && b) - (a && b0);
+      uni += (a || b) - (a || b0);
     }
     const double iou = uni > 0 ? double(inter) / double(uni) : 1.0;
     if (iou < options_.minIou) return -1.0;
     if (!localPoints_.empty()) {
-      // Only points near the changed primitives move: those in their bounds
-      // grown by 2 % of D are measured again, the others keep their distance.
       const Aabb near = region.grown(0.02 * diagonal_);
-      std::vector<Vec3> moved;
-      double before = 0.0;
+      std::vector<Vec3> close;
+      double was = 0.0;
       for (std::size_t i = 0; i < localPoints_.size(); ++i) {
         if (!near.contains(localPoints_[i])) continue;
-        moved.push_back(localPoints_[i]);
-        before += baseAbs_[i];
+        close.push_back(localPoints_[i]);
+        was += baseDesignedAbs_[i];
       }
-      std::vector<double> g(moved.size());
-      tree.values(moved, g);
-      double after = 0.0;
-      for (double x : g) after += std::abs(x);
-      const double mean = baseDistance_ + (after - before) / double(localPoints_.size());
-      const double noise = std::max(d_.noise, options_.minNoise * diagonal_);
-      if (mean > baseDistance_ + options_.fitnessSlack * noise) return -1.0;
+      // min and max move by at most what an operand moves: when the moved
+      // leaves' largest change already fits, the tree's does.
+      std::vector<double> bound(close.size(), 0.0), v0(close.size()), v1(close.size());
+      for (const auto& [base, now] : moved) {
+        base->values(close, v0);
+        now.values(close, v1);
+        for (std::size_t k = 0; k < close.size(); ++k) {
+          bound[k] = std::max(bound[k], std::abs(v1[k] - v0[k]));
+        }
+      }
+      double growth = 0.0;
+      for (double b : bound) growth += b;
+      const double n = double(localPoints_.size());
+      if (!fitsPoints(baseDesignedDistance_ + growth / n)) {
+        std::vector<double> g(close.size());
+        tree.values(close, g);
+        double is = 0.0;
+        for (double x : g) is += std::abs(x);
+        if (!fitsPoints(baseDesignedDistance_ + (is - was) / n)) return -1.0;
+      }
     }
     return iou;
   }
 
   void snap() {
-    if (grid_.points.empty()) grid_ = iouGrid(local_, options_.iouResolution);
-    if (!localPoints_.empty()) baseDistance_ = meanDistance(local_, true);
     std::vector<std::optional<double>> candidate(d_.parameters.size());
     std::vector<int> all;
     for (std::size_t i = 0; i < d_.parameters.size(); ++i) {
@@ -640,9 +676,8 @@ class Designer {
     for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
   }
 
-  // The points' mean |f| to `tree`; `keep`: also remember each point's |f|
-  // as the fitted tree's.
-  double meanDistance(const CsgTree& tree, bool keep = false) {
+  // The points' mean |f| to `tree`; each point's |f| into `each` when given.
+  double meanDistance(const CsgTree& tree, std::vector<double>* each = nullptr) const {
     std::vector<double> g(localPoints_.size());
     tree.values(localPoints_, g);
     double mean = 0.0;
@@ -650,7 +685,7 @@ class Designer {
       x = std::abs(x);
       mean += x;
     }
-    if (keep) baseAbs_ = g;
+    if (each) *each = g;
     return g.empty() ? 0.0 : mean / double(g.size());
   }
 
@@ -712,23 +747,20 @@ class Designer {
   }
 
   void measure() {
-    if (!options_.snap || d_.snappedCount() == 0) {
-      d_.iouToFitted = 1.0;
-    } else {
-      if (grid_.points.empty()) grid_ = iouGrid(local_, options_.iouResolution);
-      std::vector<int> allParams(d_.parameters.size());
-      for (std::size_t i = 0; i < allParams.size(); ++i) allParams[i] = int(i);
-      const double minIou = options_.minIou;
-      const double slack = options_.fitnessSlack;
-      options_.minIou = -1.0;
-      options_.fitnessSlack = kInf;
-      d_.iouToFitted = check(allParams);
-      options_.minIou = minIou;
-      options_.fitnessSlack = slack;
+    const CsgTree tree = d_.localTree();
+    if (!grid_.points.empty()) {
+      std::vector<double> f(grid_.points.size());
+      tree.values(grid_.points, f);
+      long inter = 0, uni = 0;
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        inter += grid_.fittedInside[i] && f[i] >= 0.0;
+        uni += grid_.fittedInside[i] || f[i] >= 0.0;
+      }
+      d_.iouToFitted = uni > 0 ? double(inter) / double(uni) : 1.0;
     }
     if (!localPoints_.empty()) {
-      d_.meanDistanceFitted = meanDistance(local_);
-      d_.meanDistanceDesigned = meanDistance(d_.localTree());
+      d_.meanDistanceFitted = baseDistance_;
+      d_.meanDistanceDesigned = meanDistance(tree);
     }
   }
 
@@ -744,10 +776,15 @@ class Designer {
   std::vector<FoundPattern> found_;
   std::vector<Slot> slots_;
   std::vector<Slot> paramSlots_;
-  std::vector<int> countSlots_;
   IouGrid grid_;
   double baseDistance_ = 0.0;
   std::vector<double> baseAbs_;  // each point's |f| to the fitted tree
+  // The baseline: the designed tree before any snap.
+  std::vector<Primitive> basePrims_;     // its leaves
+  std::vector<char> baseInside_;         // its inside flags on the grid
+  long baseInter_ = 0, baseUnion_ = 0;   // its grid cells in and in either with the fitted tree
+  std::vector<double> baseDesignedAbs_;  // each point's |f| to it
+  double baseDesignedDistance_ = 0.0;    // their mean
 };
 
 }  // namespace
