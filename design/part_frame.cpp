@@ -10,6 +10,7 @@
 #include "core/export_cutters.h"
 #include "core/export_extent.h"
 #include "design/point_support.h"
+#include "design/value_ladder.h"
 
 namespace csgvox {
 namespace {
@@ -226,9 +227,18 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
     const CsgTree inFrame = transformedTree(tree, r.transpose(), Vec3::Zero());
     const Aabb e = exportExtent(inFrame);
     const Vec3 c = solidCentroid(inFrame, e);
-    const auto high = [&](int k) { return c[k] > e.center()[k] + 1e-3 * e.size()[k]; };
-    if (high(2)) z = -z;
-    if (high(0)) x = -x;
+    // A part symmetric along the axis (its centroid within 10⁻³ of its
+    // extent of the middle) keeps the sign that points the axis most along
+    // a world axis's positive side: either gives the same values.
+    const auto flip = [&](int k, const Vec3& axis) {
+      const double off = c[k] - e.center()[k], margin = 1e-3 * e.size()[k];
+      if (std::abs(off) > margin) return off > 0.0;
+      int w = 0;
+      axis.cwiseAbs().maxCoeff(&w);
+      return axis[w] < 0.0;
+    };
+    if (flip(2, z)) z = -z;
+    if (flip(0, x)) x = -x;
   }
   PartFrame frame;
   frame.spinFree = spinFree;
@@ -267,7 +277,9 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
   frame.origin = frame.rotation * origin;
   const double originTol = options.originTolerance * localExtent.diagonal();
   for (int i = 0; i < 3; ++i) {
-    if (std::abs(frame.origin[i]) <= originTol) frame.origin[i] = 0.0;
+    if (const auto v = simplestLength(frame.origin[i], originTol, UnitSystem::Millimetre)) {
+      frame.origin[i] = *v;
+    }
   }
   return frame;
 }

@@ -33,16 +33,18 @@ struct PartFrame {
 struct FrameOptions {
   double parallelTolerance = 1e-3;  ///< directions this close to parallel vote together, radians
   double worldTolerance = 1e-6;     ///< a frame this close to the world axes becomes them, radians
-  double originTolerance = 1e-6;    ///< origin coordinates this close to 0 become 0, fraction of
-                                    ///< the part's diagonal
+  double originTolerance = 1e-6;    ///< origin coordinates this close to a whole unit (half,
+                                    ///< tenth, hundredth) become it, fraction of the diagonal
 };
 
 /// The frame of `tree`. Directions vote with the number of `points` (scan
 /// points, world coordinates) lying on the faces they orient, or with the
 /// faces' areas when `points` is empty; z is the heaviest cylinder, cone or
-/// torus axis (the heaviest direction when there is none), x the heaviest
-/// direction orthogonal to it. Signs put the solid's centroid on the low side
-/// of z and x. A rotated copy of a tree gives the rotated frame.
+/// torus axis (the heaviest direction when there is none), x the direction
+/// orthogonal to it, of those with at least 5 % of the votes, along which
+/// the part is longest (else free: spinFree). Signs put the solid's centroid on the low side
+/// of z and x. A rotated copy of a tree gives the rotated frame (up to the
+/// signs of a symmetric part's axes, which give the same values).
 /// @throw std::invalid_argument for an empty tree.
 PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points = {},
                     const FrameOptions& options = {});
