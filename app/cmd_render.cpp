@@ -7,8 +7,12 @@
 #include "app/options.h"
 #include "app/tree_command.h"
 #include "cad/step_export.h"
+#include "design/designed_tree.h"
 #include "io/csg_writer.h"
+#include "io/design_json.h"
+#include "io/design_scad.h"
 #include "io/errors.h"
+#include "io/freecad_macro.h"
 #include "io/file_util.h"
 #include "io/mesh_files.h"
 #include "io/png_file.h"
@@ -31,7 +35,17 @@ struct RenderOptions {
   int facets = ScadOptions{}.facets;
   std::string scan;
   int panelSize = PreviewOptions{}.panelSize;
+  bool rawValues = false;
 };
+
+// The designed form of the tree, in the frame its tree.json records (else
+// one chosen from the tree).
+DesignedTree designedFromFile(const CsgTree& tree, const std::string& path) {
+  if (const std::optional<PartFrame> frame = readTreeFrame(path)) {
+    return designTree(tree, *frame, {});
+  }
+  return designTree(tree);
+}
 
 }  // namespace
 
@@ -41,7 +55,8 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
   app.add_option("-o,--output", opt->output,
                  "Output file; its extension picks the format: .ply .stl .obj (mesh), "
                  ".scad (OpenSCAD), .txt (expression), .json (tree), .step (exact B-rep), "
-                 ".csg (OpenSCAD CSG, for FreeCAD), .png (preview picture)")
+                 ".csg (OpenSCAD CSG, for FreeCAD), .FCMacro (parametric FreeCAD model), .png (preview "
+                 "picture)")
       ->required();
   app.add_option("--res", opt->resolution,
                  "Mesh resolution: grid cells along the longest side of the part")
@@ -54,6 +69,9 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
                  ".png: also draw this scan's points coloured by their distance to the tree");
   app.add_option("--size", opt->panelSize, ".png: width and height of each panel, pixels")
       ->check(inRange(64, 4096));
+  app.add_flag("--raw-values", opt->rawValues,
+               ".scad, .txt, .json: write the tree's values as they are (by default: the part's "
+               "frame, designed values, parameters and patterns)");
   return [opt, &common]() -> int {
     Console console(common.quiet);
     const auto [tree, ext] = readTreeCommand(common, opt->tree, opt->output);
@@ -70,11 +88,25 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
     } else if (ext == "scad") {
       ScadOptions so;
       so.facets = opt->facets;
-      writeScad(std::filesystem::path(opt->output), tree, so);
+      if (opt->rawValues) {
+        writeScad(std::filesystem::path(opt->output), tree, so);
+      } else {
+        writeDesignedScad(std::filesystem::path(opt->output), designedFromFile(tree, opt->tree), so);
+      }
     } else if (ext == "txt") {
-      writeTreeText(std::filesystem::path(opt->output), tree);
+      if (opt->rawValues) {
+        writeTreeText(std::filesystem::path(opt->output), tree);
+      } else {
+        writeTreeText(std::filesystem::path(opt->output), designedFromFile(tree, opt->tree));
+      }
     } else if (ext == "json") {
-      writeTreeJson(std::filesystem::path(opt->output), tree);
+      if (opt->rawValues) {
+        writeTreeJson(std::filesystem::path(opt->output), tree);
+      } else {
+        writeDesignedTreeJson(std::filesystem::path(opt->output), designedFromFile(tree, opt->tree));
+      }
+    } else if (ext == "fcmacro") {
+      writeFreecadMacro(std::filesystem::path(opt->output), designedFromFile(tree, opt->tree));
     } else if (ext == "csg") {
       writeCsg(std::filesystem::path(opt->output), tree);
     } else if (ext == "step" || ext == "stp") {
@@ -99,7 +131,7 @@ Command setupRender(CLI::App& app, CommonOptions& common) {
     } else {
       throw IoError(opt->output +
                     ": unsupported output format (use .ply, .stl, .obj, .scad, .txt, .json, .csg, "
-                    ".step or .png)");
+                    ".step, .FCMacro or .png)");
     }
     console.info("wrote " + opt->output);
     return 0;

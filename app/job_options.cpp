@@ -74,6 +74,11 @@ void addJobOptions(CLI::App& app, JobOptions& job) {
                "hybrid: end with the finish (the Ceres fit of every primitive parameter of the "
                "final tree on the points, relations kept exact); off by default");
   app.add_flag("!--no-preview", job.preview, "Do not write preview.png");
+  app.add_flag("--raw-values", job.rawValues,
+               "Write the tree as fitted: no part frame, no snapped values, no parameters or "
+               "patterns in tree.scad, tree.json and tree.txt (by default they hold the designed "
+               "tree: the simplest values within the fit's uncertainty, shared parameters, "
+               "patterns as loops)");
   GpOptions& gp = o.gp;
   app.add_option("--population", gp.evolve.population, "gp: creatures per generation")
       ->check(inRange(range::population));

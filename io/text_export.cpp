@@ -76,4 +76,38 @@ void writeTreeText(const std::filesystem::path& path, const CsgTree& tree) {
   writeFileAtomically(path, [&](std::ostream& out) { writeTreeText(out, tree); });
 }
 
+void writeTreeText(std::ostream& out, const DesignedTree& design) {
+  writeTreeText(out, design.tree());
+  for (const DesignedPattern& p : design.patterns) {
+    out << p.name << " = " << p.kindName() << "(";
+    for (std::size_t i = 0; i < p.members.size(); ++i) {
+      out << (i ? ", " : "") << design.leaves[std::size_t(p.members[i])].name;
+    }
+    const auto v = [&](const Expression& e) { return formatNumber(e.value(design.parameters)); };
+    const auto vec = [&](const std::array<Expression, 3>& s) {
+      return formatVector(design.frame.rotation *
+                          Vec3(s[0].value(design.parameters), s[1].value(design.parameters),
+                               s[2].value(design.parameters)));
+    };
+    out << "; count = " << formatNumber(design.parameters[std::size_t(p.count)].value);
+    if (p.kind == PatternKind::Circular) {
+      out << ", axis = " << formatVector(design.frame.rotation.col(2)) << ", center = "
+          << formatVector(design.frame.toWorld(Vec3(p.centerX.value(design.parameters),
+                                                    p.centerY.value(design.parameters), 0.0)))
+          << ", radius = " << v(p.radius) << ", phase = " << v(p.phase);
+    } else {
+      out << ", step = " << vec(p.step);
+      if (p.kind == PatternKind::Lattice) {
+        out << ", count2 = " << formatNumber(design.parameters[std::size_t(p.count2)].value)
+            << ", step2 = " << vec(p.step2);
+      }
+    }
+    out << ")\n";
+  }
+}
+
+void writeTreeText(const std::filesystem::path& path, const DesignedTree& design) {
+  writeFileAtomically(path, [&](std::ostream& out) { writeTreeText(out, design); });
+}
+
 }  // namespace csgvox

@@ -1,9 +1,14 @@
 #include "job/job.h"
 
 #include <cstdio>
+#include <optional>
 
 #include "cad/step_export.h"
+#include "design/designed_tree.h"
 #include "io/csg_writer.h"
+#include "io/design_json.h"
+#include "io/design_scad.h"
+#include "io/freecad_macro.h"
 #include "io/mesh_files.h"
 #include "io/png_file.h"
 #include "io/report.h"
@@ -16,9 +21,9 @@
 namespace csgvox {
 
 const std::vector<std::string>& jobFiles() {
-  static const std::vector<std::string> files = {"tree.json", "tree.scad",  "tree.txt",
-                                                 "tree.csg",  "tree.step",  "preview.png",
-                                                 "mesh.ply",  "report.json"};
+  static const std::vector<std::string> files = {
+      "tree.json", "tree.scad",   "tree.txt", "tree.csg",   "tree.step",
+      "tree.FCMacro", "preview.png", "mesh.ply", "report.json"};
   return files;
 }
 
@@ -42,10 +47,11 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobOptions& op
 }
 
 // tree.step and preview.png. The tree is the result: a solid OpenCASCADE
-// cannot build costs tree.step only (one error line naming the node, a
+// cannot build is tried from the fitted tree when `tree` is the designed
+// one, and then costs tree.step only (one error line naming the node, a
 // warning in the report), not the job.
 void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
-                     const TriangleMesh& mesh, const JobOptions& options,
+                     const CsgTree* fitted, const TriangleMesh& mesh, const JobOptions& options,
                      nlohmann::ordered_json& timings, nlohmann::ordered_json& warnings,
                      const RunControl& control) {
   Stopwatch watch;
@@ -53,14 +59,29 @@ void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
     output.skip("tree.step");
     warnings.push_back("tree.step: not written: this build has no OpenCASCADE");
   } else {
+    StepOptions so;
+    so.control = control;
     try {
-      StepOptions so;
-      so.control = control;
       writeStep(output.path("tree.step"), tree, so);
     } catch (const CadError& e) {
-      output.skip("tree.step");
-      std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", e.what());
-      warnings.push_back(std::string("tree.step: not written: ") + e.what());
+      // OpenCASCADE fails on some exact coincidences the designed values
+      // make; the fitted tree (the same solid within its IoU) may pass.
+      bool written = false;
+      if (fitted && !fitted->empty()) {
+        try {
+          writeStep(output.path("tree.step"), *fitted, so);
+          written = true;
+          warnings.push_back(std::string("tree.step: written from the fitted values: the designed "
+                                         "tree's solid failed: ") +
+                             e.what());
+        } catch (const CadError&) {
+        }
+      }
+      if (!written) {
+        output.skip("tree.step");
+        std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", e.what());
+        warnings.push_back(std::string("tree.step: not written: ") + e.what());
+      }
     }
   }
   timings["step"] = watch.seconds();
@@ -74,20 +95,31 @@ void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
 }
 
 // Every file of the job but report.json; `ctx` gains the export, step and
-// preview timings and any warning.
+// preview timings and any warning. With a design, tree.json, tree.scad and
+// tree.txt are its parametric forms and `tree` is its world tree.
 void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
-                    const JobOptions& options, ReportContext& ctx, const RunControl& control) {
+                    const DesignedTree* design, const JobOptions& options, ReportContext& ctx,
+                    const RunControl& control) {
   Stopwatch watch;
-  writeTreeJson(output.path("tree.json"), tree);
-  writeScad(output.path("tree.scad"), tree);
-  writeTreeText(output.path("tree.txt"), tree);
+  if (design) {
+    writeDesignedTreeJson(output.path("tree.json"), *design);
+    writeDesignedScad(output.path("tree.scad"), *design);
+    writeTreeText(output.path("tree.txt"), *design);
+    writeFreecadMacro(output.path("tree.FCMacro"), *design);
+  } else {
+    output.skip("tree.FCMacro");
+    writeTreeJson(output.path("tree.json"), tree);
+    writeScad(output.path("tree.scad"), tree);
+    writeTreeText(output.path("tree.txt"), tree);
+  }
   writeCsg(output.path("tree.csg"), tree);
   MeshOptions mo;
   mo.resolution = options.meshResolution;
   const TriangleMesh mesh = meshTree(tree, mo, control);
   writeMesh(output.path("mesh.ply"), mesh);
   ctx.timings["export"] = watch.seconds();
-  writeCadOutputs(output, scan, tree, mesh, options, ctx.timings, ctx.warnings, control);
+  writeCadOutputs(output, scan, tree, design ? &design->fitted : nullptr, mesh, options,
+                  ctx.timings, ctx.warnings, control);
 }
 
 // The files written so far, in the order of jobFiles(), report.json included.
@@ -123,17 +155,44 @@ void measureInto(ReportContext& ctx, const CsgTree& tree, double voxelIou,
   }
 }
 
+// The designed form of the fitted tree (none with raw values, or when it
+// cannot be built: a warning then, and the fitted tree is written).
+std::optional<DesignedTree> designFor(const CsgTree& fitted, const Scan& scan,
+                                      const JobOptions& options, ReportContext& ctx,
+                                      const Console& console) {
+  if (options.rawValues) return std::nullopt;
+  try {
+    return designTree(fitted, scan.cloud.points);
+  } catch (const std::exception& e) {
+    ctx.warnings.push_back(std::string("design: not built, the fitted values are written: ") +
+                           e.what());
+    console.info(std::string("warning: designed values not computed: ") + e.what());
+    return std::nullopt;
+  }
+}
+
 // Every file of the job, the tree measured, then report.json as `build`
-// shapes it from the context; returns the report.
+// shapes it from the context; returns the report. The files hold the
+// designed tree unless options.rawValues.
 template <class BuildReport>
 nlohmann::ordered_json writeFilesAndReport(OutputSet& output, ReportContext ctx,
-                                           const CsgTree& tree, double voxelIou,
+                                           const CsgTree& fitted, double voxelIou,
                                            const JobOptions& options, const Console& console,
                                            const RunControl& control, const BuildReport& build) {
-  writeTreeFiles(output, *ctx.scan, tree, options, ctx, control);
+  Stopwatch watch;
+  const std::optional<DesignedTree> design = designFor(fitted, *ctx.scan, options, ctx, console);
+  const double designSeconds = watch.seconds();
+  const CsgTree tree = design ? design->tree() : fitted;
+  if (design) {
+    ctx.timings["design"] = designSeconds;
+    console.info(fmt("design: %.0f parameters, %.0f snapped", double(design->parameters.size()),
+                     double(design->snappedCount())));
+  }
+  writeTreeFiles(output, *ctx.scan, tree, design ? &*design : nullptr, options, ctx, control);
   measureInto(ctx, tree, voxelIou, options, console);
   ctx.outputs = writtenFiles(output);
-  const nlohmann::ordered_json report = build(ctx);
+  nlohmann::ordered_json report = build(ctx);
+  if (design) report["design"] = designReportJson(*design, designSeconds);
   writeJsonFile(output.path("report.json"), report);
   return report;
 }

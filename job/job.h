@@ -27,6 +27,10 @@ struct JobOptions {
   double timeLimit = 0.0;
   int meshResolution = 160;  ///< grid of mesh.ply along the longest side
   bool preview = true;       ///< write preview.png
+  /// Write the tree as fitted (no frame, snapped values, parameters or
+  /// patterns): every file then holds the fitted numbers. Off: the files
+  /// hold the designed tree (design/designed_tree.h).
+  bool rawValues = false;
 };
 
 /// The files of one job (tree.step and preview.png may be skipped: see writeJob).

@@ -32,7 +32,9 @@ TEST_F(Cli, TheMainJobWritesTheCadOutputsAndListsThem) {
   EXPECT_EQ(fs::exists(out / "tree.step"), step);
   std::vector<std::string> expected = {"tree.json", "tree.scad", "tree.txt", "tree.csg"};
   if (step) expected.push_back("tree.step");
-  for (const char* name : {"preview.png", "mesh.ply", "report.json"}) expected.push_back(name);
+  for (const char* name : {"tree.FCMacro", "preview.png", "mesh.ply", "report.json"}) {
+    expected.push_back(name);
+  }
   EXPECT_EQ(outputsOf(out / "report.json"), expected);
 
   const CsgTree tree = readTreeJson(out / "tree.json");

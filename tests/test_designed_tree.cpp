@@ -1,0 +1,208 @@
+// The designed tree: frame, snapped parameters, shared groups and patterns,
+// on the bundled parts' true trees moved and perturbed as a fit leaves them.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+
+#include "design/designed_tree.h"
+#include "design/part_frame.h"
+#include "design/value_ladder.h"
+#include "io/tree_json.h"
+#include "part_list.h"
+#include "test_helpers.h"
+
+namespace csgvox {
+namespace {
+
+using test::dataDir;
+
+CsgTree part(const std::string& name) { return readTreeJson(dataDir() / name / "tree.json"); }
+
+// Every length of every primitive moved by up to `noise` (a fit's error).
+CsgTree perturbed(const CsgTree& tree, double noise, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-noise, noise);
+  std::unordered_map<const Node*, NodePtr> done;
+  std::function<NodePtr(const NodePtr&)> walk = [&](const NodePtr& n) -> NodePtr {
+    if (auto it = done.find(n.get()); it != done.end()) return it->second;
+    NodePtr out;
+    if (n->kind == NodeKind::Primitive) {
+      Primitive p = std::visit(
+          [&](auto s) -> Primitive {
+            using T = decltype(s);
+            if constexpr (std::is_same_v<T, HalfSpace>) {
+              s.offset += u(rng);
+            } else {
+              s.center += Vec3(u(rng), u(rng), u(rng));
+              if constexpr (std::is_same_v<T, Box>) s.halfSize += Vec3(u(rng), u(rng), u(rng));
+              if constexpr (std::is_same_v<T, Cylinder>) s.radius += u(rng), s.height += u(rng);
+              if constexpr (std::is_same_v<T, Sphere>) s.radius += u(rng);
+              if constexpr (std::is_same_v<T, Torus>)
+                s.majorRadius += u(rng), s.minorRadius += u(rng);
+              if constexpr (std::is_same_v<T, Cone>) {
+                s.radiusBottom += s.radiusBottom > 0 ? u(rng) : 0.0;
+                s.radiusTop += s.radiusTop > 0 ? u(rng) : 0.0;
+                s.height += u(rng);
+              }
+            }
+            return s;
+          },
+          n->primitive.shape());
+      out = std::make_shared<const Node>(p, n->name);
+    } else {
+      std::vector<NodePtr> c;
+      for (const auto& k : n->children) c.push_back(walk(k));
+      out = std::make_shared<const Node>(n->kind, c);
+    }
+    return done[n.get()] = out;
+  };
+  return CsgTree(walk(tree.root()));
+}
+
+// Parameter name -> designed value.
+std::map<std::string, double> valuesOf(const DesignedTree& d) {
+  std::map<std::string, double> out;
+  for (const DesignParameter& p : d.parameters) out[p.name] = p.value;
+  return out;
+}
+
+bool hasValue(const DesignedTree& d, double v) {
+  return std::any_of(d.parameters.begin(), d.parameters.end(),
+                     [&](const DesignParameter& p) { return p.value == v; });
+}
+
+TEST(ValueLadder, TakesTheCoarsestStepWithinTheUncertainty) {
+  EXPECT_EQ(*simplestLength(33.9997, 0.001, UnitSystem::Millimetre), 34.0);
+  EXPECT_EQ(*simplestLength(12.4996, 0.001, UnitSystem::Millimetre), 12.5);
+  EXPECT_EQ(*simplestLength(0.29996, 0.001, UnitSystem::Millimetre), 0.3);
+  EXPECT_EQ(*simplestLength(7.0312, 0.002, UnitSystem::Millimetre), 7.03);
+  EXPECT_FALSE(simplestLength(7.0345, 0.0001, UnitSystem::Millimetre));
+  EXPECT_EQ(*simplestLength(-1.77, std::numeric_limits<double>::infinity(), UnitSystem::Millimetre),
+            -2.0);
+  EXPECT_DOUBLE_EQ(*simplestLength(12.71, 0.02, UnitSystem::Inch), 12.7);
+  EXPECT_EQ(*simplestAngle(29.9999, 0.001), 30.0);
+  EXPECT_EQ(*simplestAngle(-31.37, 0.5), -31.0);
+  EXPECT_EQ(inchText(31.75), "1 1/4 in");
+  EXPECT_EQ(inchText(3.175), "1/8 in");
+  EXPECT_EQ(inchText(10.0), "");
+}
+
+// The flange as a fit leaves it: every designed radius exact, the six bolt
+// holes one circular pattern, the designed tree the fitted one's shape.
+TEST(DesignedTree, FlangeBoltHolesAreOneCircle) {
+  const DesignedTree d = designTree(perturbed(part("flange"), 1e-4, 1));
+  ASSERT_EQ(d.patterns.size(), 1u);
+  const DesignedPattern& p = d.patterns.front();
+  EXPECT_EQ(p.kind, PatternKind::Circular);
+  EXPECT_EQ(p.members.size(), 6u);
+  EXPECT_EQ(p.radius.value(d.parameters), 38.0);
+  EXPECT_EQ(d.parameters[std::size_t(p.count)].value, 6.0);
+  for (double r : {50.0, 25.0, 15.0, 5.0, 31.0, 6.0}) EXPECT_TRUE(hasValue(d, r)) << r;
+  EXPECT_GE(d.iouToFitted, 0.999);
+  EXPECT_GE(test::treeIou(d.tree(), part("flange")), 0.999);
+}
+
+// A turned and moved copy of a part gives the same parameters, and the
+// designed tree lies where the copy does.
+TEST(DesignedTree, RotatedPartGivesTheSameParameters) {
+  for (const std::string name : {"flange", "plate_holes", "l_bracket", "bearing_housing"}) {
+    SCOPED_TRACE(name);
+    const CsgTree fitted = perturbed(part(name), 1e-5, 2);
+    test::Rng rng(5);
+    const Mat3 r = test::randomRotation(rng);
+    const CsgTree turned = transformedTree(fitted, r, Vec3(12.5, -40.0, 7.0));
+    const DesignedTree a = designTree(fitted), b = designTree(turned);
+    const auto va = valuesOf(a), vb = valuesOf(b);
+    ASSERT_EQ(va.size(), vb.size());
+    std::multiset<double> sa, sb;
+    for (const auto& [k, v] : va) sa.insert(std::round(v * 1e6) / 1e6);
+    for (const auto& [k, v] : vb) sb.insert(std::round(v * 1e6) / 1e6);
+    EXPECT_EQ(sa, sb);
+    EXPECT_GE(test::treeIou(b.tree(), turned), 0.995);
+  }
+}
+
+TEST(DesignedTree, PlateHolesAreOneLattice) {
+  const DesignedTree d = designTree(perturbed(part("plate_holes"), 1e-4, 3));
+  ASSERT_EQ(d.patterns.size(), 1u);
+  EXPECT_EQ(d.patterns.front().members.size(), 4u);
+  EXPECT_NE(d.patterns.front().kind, PatternKind::Circular);
+}
+
+// On every bundled part, fitted to 1e-5: every radius of the true tree on
+// the ladder's finest grid (hundredths; the knob's dome has 43.0625) is a
+// parameter's value, exactly, and the designed tree keeps the fitted one's
+// shape.
+TEST(DesignedTree, BundledPartsKeepTheirRadiiExactly) {
+  DesignOptions o;
+  o.treeUncertainty = 1e-4;
+  const auto onGrid = [](double v) { return std::abs(v * 100 - std::round(v * 100)) < 1e-9; };
+  for (const std::string& name : test::partNames()) {
+    SCOPED_TRACE(name);
+    const CsgTree truth = part(name);
+    const DesignedTree d = designTree(perturbed(truth, 1e-5, 4), {}, o);
+    EXPECT_GE(d.iouToFitted, 0.999);
+    for (const Node* leaf : truth.leaves()) {
+      if (!onGrid(leaf->primitive.as<Cylinder>() ? leaf->primitive.as<Cylinder>()->radius
+                  : leaf->primitive.as<Sphere>() ? leaf->primitive.as<Sphere>()->radius
+                                                 : 0.0)) {
+        continue;
+      }
+      if (const auto* c = leaf->primitive.as<Cylinder>()) {
+        EXPECT_TRUE(hasValue(d, c->radius)) << leaf->name << " " << c->radius;
+      }
+      if (const auto* s = leaf->primitive.as<Sphere>()) {
+        EXPECT_TRUE(hasValue(d, s->radius)) << leaf->name << " " << s->radius;
+      }
+    }
+  }
+}
+
+// The snap is refused when it would change the solid: a 10.4 wide block
+// with a loose uncertainty keeps its width (10 would lose 4 % of it).
+TEST(DesignedTree, RefusesASnapThatChangesTheSolid) {
+  const CsgTree block = CsgTree::leaf(Box{Vec3(0, 0, 0), Mat3::Identity(), Vec3(5.2, 7, 3)});
+  DesignOptions o;
+  o.treeUncertainty = 0.05;  // 0.05 of D: 10 lies within it
+  const DesignedTree d = designTree(block, {}, o);
+  EXPECT_FALSE(hasValue(d, 5.0) && hasValue(d, -5.0));
+  EXPECT_GE(d.iouToFitted, 0.999);
+  EXPECT_TRUE(test::treesEquivalent(d.tree(), block, 4000, 1));
+}
+
+// With scan points, a value the points hold tightly keeps its digits and
+// one no point holds (a hole's end past the part) snaps.
+TEST(DesignedTree, PointsSetTheUncertainty) {
+  const Cylinder plate{Vec3(0, 0, 5), Vec3::UnitZ(), 40.3, 10};
+  const Cylinder hole{Vec3(0, 0, 4.77), Vec3::UnitZ(), 8, 11.54};  // ends at 10.54 and -1
+  const CsgTree tree = CsgTree::subtract({CsgTree::leaf(plate), CsgTree::leaf(hole)});
+  std::vector<Vec3> points;
+  for (const Vec3& p : test::sampleSurface(plate, 1.0).points) {
+    if (std::abs(tree.value(p)) < 1e-9) points.push_back(p);
+  }
+  for (const Vec3& p : test::sampleSurface(hole, 1.0).points) {
+    if (std::abs(tree.value(p)) < 1e-9) points.push_back(p);
+  }
+  const DesignedTree d = designTree(tree, points);
+  EXPECT_TRUE(hasValue(d, 40.3));
+  EXPECT_TRUE(hasValue(d, 8.0));
+  EXPECT_TRUE(hasValue(d, 11.0)) << "the hole's top past the plate snaps to a whole unit";
+  EXPECT_GE(d.iouToFitted, 0.999);
+}
+
+TEST(DesignedTree, RoleNames) {
+  const DesignedTree d = designTree(part("flange"));
+  std::set<std::string> roles;
+  for (const DesignedLeaf& l : d.leaves) roles.insert(l.role);
+  EXPECT_TRUE(roles.count("hole"));
+  EXPECT_TRUE(roles.count("bore"));
+  EXPECT_TRUE(roles.count("hub"));
+  EXPECT_TRUE(roles.count("fillet"));
+}
+
+}  // namespace
+}  // namespace csgvox
