@@ -37,9 +37,11 @@ def cli_error(*args):
 
 @pytest.fixture(scope="module")
 def cli_run(tmp_path_factory):
-    """The CLI's outputs for SCAN at res 32, seed 3."""
+    """The CLI's outputs for SCAN at res 32, seed 3, with the fitted values
+    (the module's reconstruct gives the fitted tree)."""
     out = tmp_path_factory.mktemp("cli") / "wedge"
-    r = cli(SCAN, "-o", str(out), "--res", "32", "--seed", "3", "--mesh-res", "32", "--quiet")
+    r = cli(SCAN, "-o", str(out), "--res", "32", "--seed", "3", "--mesh-res", "32", "--quiet",
+            "--raw-values")
     assert r.returncode == 0, r.stderr
     return out
 
