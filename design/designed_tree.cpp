@@ -789,15 +789,33 @@ class Designer {
 
 }  // namespace
 
+namespace {
+
+// At most `most` of the points, every k-th (deterministic).
+std::vector<Vec3> thinned(std::span<const Vec3> points, int most) {
+  const std::size_t n = points.size();
+  const std::size_t cap = std::size_t(std::max(most, 1));
+  if (n <= cap) return {points.begin(), points.end()};
+  std::vector<Vec3> out;
+  out.reserve(cap);
+  for (std::size_t i = 0; i < cap; ++i) out.push_back(points[i * n / cap]);
+  return out;
+}
+
+}  // namespace
+
 DesignedTree designTree(const CsgTree& fitted, const PartFrame& frame, std::span<const Vec3> points,
                         const DesignOptions& options) {
   if (fitted.empty()) throw std::invalid_argument("designTree: empty tree");
-  return Designer(fitted, frame, points, options).run();
+  const std::vector<Vec3> used = thinned(points, options.maxPoints);
+  return Designer(fitted, frame, used, options).run();
 }
 
-DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> points,
+DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
                         const DesignOptions& options) {
   if (fitted.empty()) throw std::invalid_argument("designTree: empty tree");
+  const std::vector<Vec3> used = thinned(allPoints, options.maxPoints);
+  const std::span<const Vec3> points = used;
   PartFrame frame = partFrame(fitted, points, options.frame);
   DesignedTree d = designTree(fitted, frame, points, options);
   if (!frame.spinFree) return d;

@@ -132,6 +132,7 @@ struct DesignOptions {
                                    ///< part's diagonal (no scanner measures finer; a sampled
                                    ///< mesh's points lie on the surface to the last bits)
   int iouResolution = 48;          ///< IoU grid cells along the longest side of the part
+  int maxPoints = 20000;           ///< scan points used at most (every k-th of a larger scan)
   bool snap = true;                ///< false: parameters keep their fitted values
   FrameOptions frame;              ///< how the frame is chosen
 };
