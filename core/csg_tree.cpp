@@ -4,6 +4,7 @@
 #include <array>
 #include <functional>
 #include <stdexcept>
+#include <unordered_set>
 
 #include "core/halfspace_bounds.h"
 #include "core/tree_program.h"
@@ -285,6 +286,15 @@ std::vector<const Node*> CsgTree::leaves() const {
   visit(root_, [&](const Node& node) {
     if (node.kind == NodeKind::Primitive) out.push_back(&node);
   });
+  return out;
+}
+
+std::vector<const Node*> CsgTree::distinctLeaves() const {
+  std::vector<const Node*> out;
+  std::unordered_set<const Node*> seen;
+  for (const Node* leaf : leaves()) {
+    if (seen.insert(leaf).second) out.push_back(leaf);
+  }
   return out;
 }
 

@@ -89,6 +89,9 @@ class CsgTree {
   std::size_t depth() const;
   /// The leaves in depth-first order.
   std::vector<const Node*> leaves() const;
+  /// Each leaf node once (a node shared by two branches once), in the
+  /// depth-first order of its first use.
+  std::vector<const Node*> distinctLeaves() const;
 
   /// FRep value at p (>= 0 inside), without gradients: bit for bit the f of
   /// evaluate(p, ops). -inf for an empty tree.

@@ -382,6 +382,15 @@ double Primitive::volume() const {
   return 0.0;
 }
 
+std::vector<Vec3> Primitive::directions() const {
+  if (const auto* h = as<HalfSpace>()) return {h->normal};
+  if (const auto* b = as<Box>()) return {b->axes.col(0), b->axes.col(1), b->axes.col(2)};
+  if (const auto* c = as<Cylinder>()) return {c->axis};
+  if (const auto* c = as<Cone>()) return {c->axis};
+  if (const auto* t = as<Torus>()) return {t->axis};
+  return {};
+}
+
 double Primitive::surfaceArea() const {
   switch (type()) {
     case PrimitiveType::HalfSpace:

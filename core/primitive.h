@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include "core/geometry.h"
 
@@ -102,6 +103,9 @@ class Primitive {
   double volume() const;
   /// Surface area (infinite for a half-space).
   double surfaceArea() const;
+  /// The directions its shape depends on: a half-space's normal, a box's
+  /// three axes, a cylinder's, cone's or torus's axis (none for a sphere).
+  std::vector<Vec3> directions() const;
 
   /// Checks parameters (finite, unit axes, positive sizes).
   /// @throw std::invalid_argument naming the offending parameter.

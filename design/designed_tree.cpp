@@ -35,14 +35,6 @@ struct Slot {
   std::string owner;     // a pattern's name, when a pattern owns it
 };
 
-std::vector<const Node*> uniqueLeaves(const CsgTree& tree) {
-  std::vector<const Node*> out;
-  for (const Node* leaf : tree.leaves()) {
-    if (std::find(out.begin(), out.end(), leaf) == out.end()) out.push_back(leaf);
-  }
-  return out;
-}
-
 std::string plural(const std::string& role, int n) {
   if (n == 1) return "1 " + role;
   if (!role.empty() && (role.back() == 's' || role.back() == 'h'))
@@ -131,8 +123,8 @@ class Designer {
 
  private:
   void makeLeaves() {
-    const std::vector<const Node*> world = uniqueLeaves(d_.fitted);
-    const std::vector<const Node*> local = uniqueLeaves(local_);
+    const std::vector<const Node*> world = d_.fitted.distinctLeaves();
+    const std::vector<const Node*> local = local_.distinctLeaves();
     const LeafRoles roles = leafRoles(d_.fitted);
     d_.leaves.resize(world.size());
     std::map<std::string, int> roleCount, roleSeen;

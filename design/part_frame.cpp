@@ -21,32 +21,12 @@ struct Vote {
   bool axial = false;  // a cylinder, cone or torus axis
 };
 
-// Each leaf once, in the tree's order.
-std::vector<const Node*> uniqueLeaves(const CsgTree& tree) {
-  std::vector<const Node*> out;
-  for (const Node* leaf : tree.leaves()) {
-    if (std::find(out.begin(), out.end(), leaf) == out.end()) out.push_back(leaf);
-  }
-  return out;
-}
-
-// The directions a primitive orients: its axis (axial), a box's three axes,
-// a plane's normal.
-std::vector<Vec3> directionsOf(const Primitive& p) {
-  if (const auto* h = p.as<HalfSpace>()) return {h->normal};
-  if (const auto* b = p.as<Box>()) return {b->axes.col(0), b->axes.col(1), b->axes.col(2)};
-  if (const auto* c = p.as<Cylinder>()) return {c->axis};
-  if (const auto* c = p.as<Cone>()) return {c->axis};
-  if (const auto* t = p.as<Torus>()) return {t->axis};
-  return {};
-}
-
 bool isAxial(const Primitive& p) {
   return p.type() == PrimitiveType::Cylinder || p.type() == PrimitiveType::Cone ||
          p.type() == PrimitiveType::Torus;
 }
 
-// Areas of the faces each direction of directionsOf() orients.
+// Areas of the faces each of Primitive::directions() orients.
 std::vector<double> faceAreas(const Primitive& p, double diagonal) {
   // A plane's face within the part: at most about a square of half the
   // part's diagonal.
@@ -73,7 +53,7 @@ void addVote(std::vector<Vote>& votes, const Vec3& d, double w, bool axial, doub
 
 std::vector<Vote> directionVotes(const CsgTree& tree, std::span<const Vec3> points, double cosTol) {
   std::vector<Vote> votes;
-  const std::vector<const Node*> leaves = uniqueLeaves(tree);
+  const std::vector<const Node*> leaves = tree.distinctLeaves();
   if (!points.empty()) {
     const PointSupport support = pointSupport(tree, points);
     // Points per leaf and direction, in the tree's order.
@@ -81,7 +61,7 @@ std::vector<Vote> directionVotes(const CsgTree& tree, std::span<const Vec3> poin
     for (std::size_t i = 0; i < points.size(); ++i) {
       const Node* leaf = support.leaf[i];
       if (!leaf) continue;
-      const std::vector<Vec3> dirs = directionsOf(leaf->primitive);
+      const std::vector<Vec3> dirs = leaf->primitive.directions();
       if (dirs.empty()) continue;
       auto& c = counts[leaf];
       c.resize(dirs.size(), 0.0);
@@ -99,7 +79,7 @@ std::vector<Vote> directionVotes(const CsgTree& tree, std::span<const Vec3> poin
     for (const Node* leaf : leaves) {
       const auto it = counts.find(leaf);
       if (it == counts.end()) continue;
-      const std::vector<Vec3> dirs = directionsOf(leaf->primitive);
+      const std::vector<Vec3> dirs = leaf->primitive.directions();
       for (std::size_t j = 0; j < dirs.size(); ++j) {
         addVote(votes, dirs[j], it->second[j], isAxial(leaf->primitive), cosTol);
       }
@@ -108,7 +88,7 @@ std::vector<Vote> directionVotes(const CsgTree& tree, std::span<const Vec3> poin
   }
   const double diagonal = exportExtent(tree).diagonal();
   for (const Node* leaf : leaves) {
-    const std::vector<Vec3> dirs = directionsOf(leaf->primitive);
+    const std::vector<Vec3> dirs = leaf->primitive.directions();
     const std::vector<double> areas = faceAreas(leaf->primitive, diagonal);
     for (std::size_t j = 0; j < dirs.size() && j < areas.size(); ++j) {
       addVote(votes, dirs[j], areas[j], isAxial(leaf->primitive), cosTol);
@@ -255,8 +235,8 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
   Vec3 origin = localExtent.min;
   double bestWeight = 0.0;
   const LeafRoles roles = leafRoles(tree);
-  const std::vector<const Node*> worldLeaves = uniqueLeaves(tree);
-  const std::vector<const Node*> localLeaves = uniqueLeaves(local);
+  const std::vector<const Node*> worldLeaves = tree.distinctLeaves();
+  const std::vector<const Node*> localLeaves = local.distinctLeaves();
   for (std::size_t i = 0; i < localLeaves.size(); ++i) {
     const Primitive& p = localLeaves[i]->primitive;
     if (!isAxial(p) || !roles.adding.count(worldLeaves[i])) continue;

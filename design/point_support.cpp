@@ -23,10 +23,7 @@ PointSupport pointSupport(const CsgTree& tree, std::span<const Vec3> points,
   const double band = options.band * s.noise;
 
   // Each leaf once, in the tree's order (deterministic ties).
-  std::vector<const Node*> ordered;
-  for (const Node* leaf : tree.leaves()) {
-    if (std::find(ordered.begin(), ordered.end(), leaf) == ordered.end()) ordered.push_back(leaf);
-  }
+  const std::vector<const Node*> ordered = tree.distinctLeaves();
   s.leaf.assign(points.size(), nullptr);
   s.gradient.assign(points.size(), Vec3::Zero());
   std::vector<double> best(points.size(), band);

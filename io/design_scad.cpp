@@ -20,19 +20,6 @@ namespace {
 
 constexpr const char* kBodyMarker = "// ---- primitives";
 
-// Sides of a circle of radius r within `tolerance` (as io/scad_export.cpp).
-int segmentsFor(double r, double tolerance, int lo, int hi) {
-  double exact = double(hi);
-  if (tolerance >= r) {
-    exact = double(lo);
-  } else if (tolerance > 0.0) {
-    exact = std::numbers::pi / std::acos(1.0 - tolerance / r);
-  }
-  int n = 8;
-  for (int k = 0; n < exact && n < hi; ++k) n = (k % 2 == 0) ? n * 3 / 2 : n * 4 / 3;
-  return std::clamp(n, lo, hi);
-}
-
 std::string sig(double v, int digits = 6) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v);
@@ -76,11 +63,7 @@ struct DesignWriter {
     return e(hi) + " - " + (lo.terms.size() > 1 ? "(" + e(lo) + ")" : e(lo)) + " + 2 * g";
   }
   std::string fn(double r, double coarser = 1.0, int lo = 0) const {
-    const int n = options.facets > 0
-                      ? options.facets
-                      : segmentsFor(r, coarser * tolerance, std::max(lo, options.minSegments),
-                                    options.maxSegments);
-    return "$fn = segments(" + std::to_string(n) + ")";
+    return scadSegments(r, coarser * tolerance, options, lo);
   }
 
   std::string body(int index) const {

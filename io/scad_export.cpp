@@ -53,26 +53,7 @@ std::string rotateEuler(const Mat3& r) {
   return "rotate(" + vec(Vec3(a, b, c) * kDeg) + ") ";
 }
 
-// Sides of a polygon inscribed in a circle of radius r whose chords stay
-// within `tolerance` of the circle (sagitta r·(1 − cos(π/n))), rounded up to
-// the next of 8, 12, 16, 24, 32, 48, 64, 96, ... (multiples of four, so the
-// circle's extremes along its frame's axes are vertices; and coaxial
-// surfaces of close radii, a thin wall's two sides, get the same count, so
-// their vertices line up and the wall keeps its thickness), clamped to
-// [lo, hi].
-int segmentsFor(double r, double tolerance, int lo, int hi) {
-  double exact = double(hi);
-  if (tolerance >= r) {
-    exact = double(lo);
-  } else if (tolerance > 0.0) {
-    exact = std::numbers::pi / std::acos(1.0 - tolerance / r);
-  }
-  int n = 8;
-  for (int k = 0; n < exact && n < hi; ++k) n = (k % 2 == 0) ? n * 3 / 2 : n * 4 / 3;
-  return std::clamp(n, lo, hi);
-}
 
-std::string segmentsText(int n) { return "$fn = segments(" + std::to_string(n) + ")"; }
 
 struct Writer {
   std::ostream& out;
@@ -86,9 +67,7 @@ struct Writer {
 
   // $fn of a circle of radius r (`coarser`: multiple of the tolerance).
   std::string fn(double r, double coarser = 1.0, int lo = 0) const {
-    if (options.facets > 0) return segmentsText(options.facets);
-    return segmentsText(segmentsFor(r, coarser * tolerance, std::max(lo, options.minSegments),
-                                    options.maxSegments));
+    return scadSegments(r, coarser * tolerance, options, lo);
   }
 
   std::string cube(const StandInCube& c) const {
@@ -155,6 +134,29 @@ struct Writer {
 
 }  // namespace
 
+// Sides of a polygon inscribed in a circle of radius r whose chords stay
+// within `tolerance` (sagitta r·(1 − cos(π/n))), rounded up to the next of 8,
+// 12, 16, 24, 32, 48, 64, 96, ... (multiples of four, so the circle's
+// extremes along its frame's axes are vertices; and coaxial surfaces of close
+// radii, a thin wall's two sides, get the same count, so their vertices line
+// up and the wall keeps its thickness), clamped to [lo, hi].
+std::string scadSegments(double r, double tolerance, const ScadOptions& options, int minimum) {
+  int n = options.facets;
+  if (n <= 0) {
+    const int lo = std::max(minimum, options.minSegments), hi = options.maxSegments;
+    double exact = double(hi);
+    if (tolerance >= r) {
+      exact = double(lo);
+    } else if (tolerance > 0.0) {
+      exact = std::numbers::pi / std::acos(1.0 - tolerance / r);
+    }
+    n = 8;
+    for (int k = 0; n < exact && n < hi; ++k) n = (k % 2 == 0) ? n * 3 / 2 : n * 4 / 3;
+    n = std::clamp(n, lo, hi);
+  }
+  return "$fn = segments(" + std::to_string(n) + ")";
+}
+
 void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& options) {
   const Aabb part = exportExtent(tree);
   const auto names = leafNames(tree);
@@ -195,9 +197,7 @@ void writeScad(std::ostream& out, const CsgTree& tree, const ScadOptions& option
          "// and makes rendering (F6) several times slower.\n"
       << "detail = 1;\n"
       << "function segments(n) = max(3, round(n * detail));\n\n";
-  std::set<const Node*> seen;
-  for (const Node* leaf : tree.leaves()) {
-    if (!seen.insert(leaf).second) continue;
+  for (const Node* leaf : tree.distinctLeaves()) {
     const std::string& name = names.at(leaf);
     const bool cuts = overcut > 0.0 && removes.count(leaf) > 0;
     if (adds.count(leaf) || !cuts) {

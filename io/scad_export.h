@@ -18,6 +18,7 @@
 
 #include <filesystem>
 #include <iosfwd>
+#include <string>
 
 #include "core/csg_tree.h"
 
@@ -37,6 +38,13 @@ struct ScadOptions {
   double overcut = 1e-6;        ///< a removing primitive's faces move out by this, fraction of the
                                 ///< part's diagonal (0: written as they are)
 };
+
+/// `$fn = segments(N)` for a curve of radius r: the fewest of 8, 12, 16, 24,
+/// 32, 48, 64, 96, ... sides whose chords stay within `tolerance` (scan units)
+/// of the circle, at least max(minimum, options.minSegments) and at most
+/// options.maxSegments; options.facets when it is > 0. `segments` is the
+/// program's function that scales the count by its `detail` variable.
+std::string scadSegments(double r, double tolerance, const ScadOptions& options, int minimum = 0);
 
 /// Writes the OpenSCAD program. @throw std::invalid_argument for an empty tree
 /// or one whose bounded primitives give no extent for the half-space boxes.

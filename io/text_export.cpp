@@ -1,7 +1,6 @@
 #include "io/text_export.h"
 
 #include <ostream>
-#include <set>
 #include <sstream>
 
 #include "io/file_util.h"
@@ -65,9 +64,7 @@ std::string treeExpression(const CsgTree& tree) {
 void writeTreeText(std::ostream& out, const CsgTree& tree) {
   const auto names = leafNames(tree);
   out << (tree.empty() ? std::string("empty") : expression(*tree.root(), names)) << "\n";
-  std::set<const Node*> seen;
-  for (const Node* leaf : tree.leaves()) {
-    if (!seen.insert(leaf).second) continue;
+  for (const Node* leaf : tree.distinctLeaves()) {
     out << names.at(leaf) << " = " << definition(leaf->primitive) << "\n";
   }
 }

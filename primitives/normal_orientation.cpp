@@ -9,6 +9,7 @@
 #include <numbers>
 #include <numeric>
 #include <stdexcept>
+#include <limits>
 #include <tuple>
 #include <vector>
 
@@ -151,27 +152,15 @@ class Occupancy {
 
   double cell() const { return cell_; }
 
-  /// True when the ray from `from` along the unit `dir`, starting `start`
-  /// away, leaves the grid without meeting an occupied cell.
-  bool escapes(const Vec3& from, const Vec3& dir, double start) const {
-    const double step = 0.5 * cell_;
-    for (double t = start;; t += step) {
-      const Vec3 c = (from + t * dir - origin_) / cell_;
-      if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= dims_[0] || c.y() >= dims_[1] ||
-          c.z() >= dims_[2]) {
-        return true;
-      }
-      if (cells_[index({int(c.x()), int(c.y()), int(c.z())})] != 0) return false;
-    }
-  }
-
   /// How many layers of occupied cells the ray from `from` along the unit
-  /// `dir`, starting `start` away, crosses before it leaves the grid.
-  int crossings(const Vec3& from, const Vec3& dir, double start) const {
+  /// `dir`, starting `start` away, crosses before it leaves the grid,
+  /// counting no further than `limit` (1: does it meet any surface at all).
+  int crossings(const Vec3& from, const Vec3& dir, double start,
+                int limit = std::numeric_limits<int>::max()) const {
     const double step = 0.5 * cell_;
     int count = 0;
     bool inside = false;
-    for (double t = start;; t += step) {
+    for (double t = start; count < limit; t += step) {
       const Vec3 c = (from + t * dir - origin_) / cell_;
       if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= dims_[0] || c.y() >= dims_[1] ||
           c.z() >= dims_[2]) {
@@ -181,6 +170,7 @@ class Occupancy {
       if (occupied && !inside) ++count;
       inside = occupied;
     }
+    return count;
   }
 
  private:
@@ -247,6 +237,24 @@ Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normal
       }
     }
     const bool skip[2] = {across[0] && !across[1], across[1] && !across[0]};
+    // A ray that meets no surface at all is the clearest sign of outside:
+    // where rays escape on one side only, that side is outside (a surface
+    // inside a concavity or a bore, whose parity rays may pass unseen walls,
+    // is seen from outside through its opening). Escapes on both sides mean
+    // a face the scanner never saw lets rays out of the material: parity
+    // decides.
+    bool escaped[2] = {false, false};
+    for (const Vec3& d : dirs) {
+      const double c = d.dot(nrm);
+      const int sideIndex = c > 0 ? 0 : 1;
+      if (std::abs(c) < kEscapeMinCosine || skip[sideIndex] || escaped[sideIndex]) continue;
+      escaped[sideIndex] = grid.crossings(points[i], d, start, 1) == 0;
+      if (escaped[0] && escaped[1]) break;
+    }
+    if (escaped[0] != escaped[1]) {
+      vote[s] = escaped[0] ? 1.0 : -1.0;
+      return;
+    }
     int score = 0;
     int rays = 0;
     for (double side : {1.0, -1.0}) {
@@ -266,19 +274,6 @@ Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normal
       }
     }
     vote[s] = double(score) / rays;
-    // A ray that meets no surface at all is the clearest sign of outside:
-    // where rays escape on one side only, that side is outside (a surface
-    // inside a concavity or a bore, whose parity rays may pass unseen walls,
-    // is seen from outside through its opening). Escapes on both sides mean
-    // a face the scanner never saw lets rays out of the material: parity
-    // decides.
-    int out = 0, in = 0;
-    for (const Vec3& d : dirs) {
-      const double c = d.dot(nrm);
-      if (std::abs(c) < kEscapeMinCosine || skip[c > 0 ? 0 : 1]) continue;
-      if (grid.escapes(points[i], d, start)) ++(c > 0 ? out : in);
-    }
-    if ((out > 0) != (in > 0)) vote[s] = out > 0 ? 1.0 : -1.0;
   });
   Votes votes;
   votes.sum.assign(patches.points.size(), 0.0);

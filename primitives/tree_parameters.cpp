@@ -56,16 +56,6 @@ Mat3 rotationOf(const double* w) {
   return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
 }
 
-// The directions a primitive's shape depends on.
-std::vector<Vec3> directionsOf(const Primitive& p) {
-  if (const auto* h = p.as<HalfSpace>()) return {h->normal};
-  if (const auto* b = p.as<Box>()) return {b->axes.col(0), b->axes.col(1), b->axes.col(2)};
-  if (const auto* c = p.as<Cylinder>()) return {c->axis};
-  if (const auto* c = p.as<Cone>()) return {c->axis};
-  if (const auto* t = p.as<Torus>()) return {t->axis};
-  return {};
-}
-
 }  // namespace
 
 struct TreeParameters::Data {
@@ -234,9 +224,7 @@ TreeParameters::TreeParameters(const CsgTree& tree, double scale, const Vec3& pi
   d.lengthTolerance = options.lengthTolerance * scale;
   d.angleTolerance = options.angleTolerance;
   d.rotate = options.rotate;
-  for (const Node* leaf : tree.leaves())
-    if (std::find(d.leaves.begin(), d.leaves.end(), leaf) == d.leaves.end())
-      d.leaves.push_back(leaf);
+  d.leaves = tree.distinctLeaves();
 
   // Direction classes, then frames: classes that are orthogonal or axes of
   // one box turn together.
@@ -244,7 +232,7 @@ TreeParameters::TreeParameters(const CsgTree& tree, double scale, const Vec3& pi
   for (const Node* leaf : d.leaves) {
     std::vector<int> ks;
     double sign = 1.0;
-    for (const Vec3& dir : directionsOf(leaf->primitive)) ks.push_back(d.classOf(dir, sign));
+    for (const Vec3& dir : leaf->primitive.directions()) ks.push_back(d.classOf(dir, sign));
     if (ks.size() == 3) boxClasses.push_back(ks);
   }
   std::vector<int> parent(d.classes.size());

@@ -329,18 +329,23 @@ ScannerScan scanAll(const Scene& scene, int side) {
 // Points the views must give so that `wanted` can be kept with the density
 // ramp: the dense end keeps all its points, the rest keep a fraction of
 // theirs (the ramp's mean weight, (1 - 1/F) / ln F, for F > 1).
-// Points kept of `scanned` (every point when there is no density ramp).
-std::size_t pointsToKeep(std::size_t scanned, double densityVariation) {
-  if (densityVariation <= 1.0) return scanned;
-  const double f = densityVariation;
-  return std::size_t(double(scanned) * (1.0 - 1.0 / f) / std::log(f));
+// The mean keep weight F^-s of a density ramp over s in [0, 1] (1 without
+// one): the fraction of the views' points kept when the dense end keeps all.
+double rampKeptFraction(double densityVariation) {
+  if (densityVariation <= 1.0) return 1.0;
+  return (1.0 - 1.0 / densityVariation) / std::log(densityVariation);
 }
 
+// Points kept of `scanned` (every point when there is no density ramp).
+std::size_t pointsToKeep(std::size_t scanned, double densityVariation) {
+  return std::size_t(double(scanned) * rampKeptFraction(densityVariation));
+}
+
+// Points the views must give so that `wanted` can be kept with the density
+// ramp (a 2 % margin with one).
 std::size_t pointsToScan(std::size_t wanted, double densityVariation) {
   if (densityVariation <= 1.0) return wanted;
-  const double f = densityVariation;
-  const double meanWeight = (1.0 - 1.0 / f) / std::log(f);
-  return std::size_t(std::ceil(1.02 * double(wanted) / meanWeight));
+  return std::size_t(std::ceil(1.02 * double(wanted) / rampKeptFraction(densityVariation)));
 }
 
 // Keeps a random `count` of the scan's points, in their order. With a

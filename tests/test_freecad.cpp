@@ -7,7 +7,6 @@
 // through. Skipped, saying so, only when freecadcmd is not installed.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -21,6 +20,7 @@
 #include "core/export_extent.h"
 #include "io/csg_writer.h"
 #include "io/tree_json.h"
+#include "freecad_run.h"
 #include "part_list.h"
 #include "solid_sampling.h"
 #include "temp_dir_test.h"
@@ -30,8 +30,6 @@ namespace csgvox {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool haveFreecad() { return std::system("command -v freecadcmd > /dev/null 2>&1") == 0; }
 
 class FreeCad : public test::TempDirTest {};
 
@@ -51,7 +49,7 @@ CsgTree flushBoreFlange() {
 }
 
 TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {
-  if (!haveFreecad())
+  if (!test::haveFreecad())
     GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
   if (!stepExportAvailable()) GTEST_SKIP() << "built without OpenCASCADE (CSGVOX_WITH_OCCT=OFF)";
   std::map<std::string, CsgTree> trees;
@@ -71,18 +69,10 @@ TEST_F(FreeCad, OpensEveryPartsStepAndCsgWithTheTreesVolume) {
     list << part << "\n";
   }
   list.close();
-  const std::string cmd = "cd '" + dir_.string() + "' && CSGVOX_FREECAD_DIR='" + dir_.string() +
-                          "' timeout 600 freecadcmd '" + CSGVOX_TESTS_DIR +
-                          "/freecad_check.py' > freecad.log 2>&1";
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status)) << cmd;
-  ASSERT_TRUE(fs::exists(dir_ / "results.txt")) << "freecadcmd did not finish; its output:\n"
-                                                << std::ifstream(dir_ / "freecad.log").rdbuf();
-
-  std::ifstream results(dir_ / "results.txt");
-  std::string line;
+  std::vector<std::string> lines;
+  ASSERT_TRUE(test::runFreecadScript(dir_, "freecad_check.py", lines));
   std::size_t done = 0;
-  while (std::getline(results, line)) {
+  for (const std::string& line : lines) {
     std::istringstream in(line);
     std::string name;
     int stepSolids = 0, stepValid = 0, csgRoots = 0, csgValid = 0, features = 0;

@@ -5,7 +5,6 @@
 // freecadcmd is not installed.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -16,6 +15,7 @@
 #include "design/designed_tree.h"
 #include "io/freecad_macro.h"
 #include "io/tree_json.h"
+#include "freecad_run.h"
 #include "part_list.h"
 #include "temp_dir_test.h"
 
@@ -23,8 +23,6 @@ namespace csgvox {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool haveFreecad() { return std::system("command -v freecadcmd > /dev/null 2>&1") == 0; }
 
 class FreecadMacro : public test::TempDirTest {};
 
@@ -45,7 +43,7 @@ std::string point(const Vec3& p) {
 }
 
 TEST_F(FreecadMacro, BuildsEveryPartAndFollowsTheSheet) {
-  if (!haveFreecad())
+  if (!test::haveFreecad())
     GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
   if (!stepExportAvailable()) GTEST_SKIP() << "built without OpenCASCADE (CSGVOX_WITH_OCCT=OFF)";
   std::ofstream list(dir_ / "parts.txt");
@@ -71,17 +69,10 @@ TEST_F(FreecadMacro, BuildsEveryPartAndFollowsTheSheet) {
     list << "\n";
   }
   list.close();
-  const std::string cmd = "cd '" + dir_.string() + "' && CSGVOX_FREECAD_DIR='" + dir_.string() +
-                          "' timeout 600 freecadcmd '" + CSGVOX_TESTS_DIR +
-                          "/freecad_macro_check.py' > freecad.log 2>&1";
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status)) << cmd;
-  ASSERT_TRUE(fs::exists(dir_ / "results.txt")) << "freecadcmd did not finish; its output:\n"
-                                                << std::ifstream(dir_ / "freecad.log").rdbuf();
-  std::ifstream results(dir_ / "results.txt");
-  std::string line;
+  std::vector<std::string> lines;
+  ASSERT_TRUE(test::runFreecadScript(dir_, "freecad_macro_check.py", lines));
   std::size_t done = 0;
-  while (std::getline(results, line)) {
+  for (const std::string& line : lines) {
     std::istringstream in(line);
     std::string name;
     int solids = 0, valid = 0;
