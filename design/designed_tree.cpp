@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -13,6 +14,7 @@
 #include "core/decimal.h"
 #include "core/export_cutters.h"
 #include "core/export_extent.h"
+#include "core/seed.h"
 #include "design/leaf_fields.h"
 #include "design/pattern_detection.h"
 #include "design/point_support.h"
@@ -43,7 +45,10 @@ std::string plural(const std::string& role, int n) {
 }
 
 // The grid the IoU against the fitted tree is measured on, and the fitted
-// tree's inside flags on it.
+// tree's inside flags on it. One point per cell, at a fixed random place in
+// it (stratified sampling): at cell centres a face parallel to the grid, as
+// the frame makes most faces, flips whole layers or nothing as it moves, so
+// a snap that moves it by a third of a cell would count as no change.
 struct IouGrid {
   std::vector<Vec3> points;
   std::vector<char> fittedInside;
@@ -60,10 +65,14 @@ IouGrid iouGrid(const CsgTree& local, int resolution) {
   const int ny = std::max(1, int(std::ceil(size.y() / cell)));
   const int nz = std::max(1, int(std::ceil(size.z() / cell)));
   g.points.reserve(std::size_t(nx) * ny * nz);
+  const auto unit = [](std::uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; };
+  std::uint64_t index = 0;
   for (int i = 0; i < nx; ++i)
     for (int j = 0; j < ny; ++j)
-      for (int k = 0; k < nz; ++k)
-        g.points.push_back(box.min + cell * Vec3(i + 0.5, j + 0.5, k + 0.5));
+      for (int k = 0; k < nz; ++k, ++index) {
+        const std::uint64_t a = mixSeed(index, 0), b = mixSeed(index, 1), c = mixSeed(index, 2);
+        g.points.push_back(box.min + cell * Vec3(i + unit(a), j + unit(b), k + unit(c)));
+      }
   std::vector<double> f(g.points.size());
   local.values(g.points, f);
   g.fittedInside.resize(f.size());
@@ -591,7 +600,6 @@ class Designer {
       uni += (a || b) - (a || b0);
     }
     const double iou = uni > 0 ? double(inter) / double(uni) : 1.0;
-    if (iou < options_.minIou) return -1.0;
     if (!localPoints_.empty()) {
       const Aabb near = region.grown(0.02 * diagonal_);
       std::vector<Vec3> close;
@@ -643,27 +651,36 @@ class Designer {
             on ? *candidate[std::size_t(i)] : d_.parameters[std::size_t(i)].fitted;
       }
     };
+    // All together first: when the set costs no more than one parameter may,
+    // it is kept. Else each parameter on its own: the solid it changes (IoU
+    // against the fitted tree, from the baseline's) and the points' fit;
+    // then the ones that pass, together, for the points' fit, dropping the
+    // costliest until it passes.
+    const double baseIou = baseUnion_ > 0 ? double(baseInter_) / double(baseUnion_) : 1.0;
+    const auto passes = [&](double iou) {
+      return iou >= 0.0 && baseIou - iou <= 1.0 - options_.minIou;
+    };
     apply(all, true);
-    if (check(all) < 0.0) {
-      apply(all, false);
-      // One group at a time; then the ones that pass, together, dropping the
-      // costliest until they pass.
-      std::vector<std::pair<double, int>> passing;
-      for (int i : all) {
-        apply({i}, true);
-        const double iou = check({i});
-        apply({i}, false);
-        if (iou >= 0.0) passing.emplace_back(iou, i);
-      }
-      std::stable_sort(passing.begin(), passing.end(),
-                       [](const auto& a, const auto& b) { return a.first > b.first; });
-      all.clear();
-      for (const auto& [iou, i] : passing) all.push_back(i);
-      apply(all, true);
-      while (!all.empty() && check(all) < 0.0) {
-        apply({all.back()}, false);
-        all.pop_back();
-      }
+    if (passes(check(all))) {
+      for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
+      return;
+    }
+    apply(all, false);
+    std::vector<std::pair<double, int>> passing;
+    for (int i : all) {
+      apply({i}, true);
+      const double iou = check({i});
+      apply({i}, false);
+      if (passes(iou)) passing.emplace_back(iou, i);
+    }
+    std::stable_sort(passing.begin(), passing.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    all.clear();
+    for (const auto& [iou, i] : passing) all.push_back(i);
+    apply(all, true);
+    while (!all.empty() && check(all) < 0.0) {
+      apply({all.back()}, false);
+      all.pop_back();
     }
     for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
   }

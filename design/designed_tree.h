@@ -9,10 +9,13 @@
 ///   uncertainty  u = k·σ/√n: σ the scan's noise about the tree, n the
 ///                points on the faces the value places (infinite when no
 ///                point holds it, the tree's own tolerance without points);
-///   kept         when the voxel IoU of the snapped tree against the fitted
-///                one stays ≥ minIou and the points' mean distance to the
-///                tree grows by at most fitnessSlack·σ — tried for all
-///                parameters together, else parameter by parameter.
+///   kept         all together when that costs the tree at most 1 − minIou
+///                of voxel IoU; else per parameter (a group of values the
+///                fit shares): when snapping it alone costs at most that
+///                (against the fitted tree; stratified points, one per
+///                cell) — then for the ones kept, together, while the
+///                points' mean distance to the tree grows by at most
+///                fitnessSlack·σ (the costliest dropped until it does).
 ///
 /// Patterns (design/pattern_detection.h) are written as one member, a count
 /// and a step. The fitted tree's structure is kept: every leaf of it has a
@@ -125,7 +128,7 @@ struct DesignOptions {
                                    ///< the part's diagonal (and its angle in radians)
   double alignTolerance = 1e-4;    ///< a direction this close to a frame axis is taken as it,
                                    ///< radians
-  double minIou = 0.999;           ///< least voxel IoU of the snapped tree against the fitted one
+  double minIou = 0.999;  ///< least voxel IoU against the fitted tree after one parameter's snap
   double fitnessSlack = 1.0;       ///< the points' mean distance may grow by this many noise
                                    ///< deviations
   double minNoise = 1e-4;          ///< least noise deviation that test allows, fraction of the

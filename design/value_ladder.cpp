@@ -33,6 +33,9 @@ std::optional<double> onLadder(double value, double uncertainty, std::span<const
   if (!std::isfinite(value)) return std::nullopt;
   if (std::isinf(uncertainty)) return multipleOf(value, steps.front());
   for (double step : steps) {
+    // A finer step than twice the uncertainty always has a multiple within
+    // it: that would be rounding, not a designed value found.
+    if (step != steps.front() && step <= 2.0 * uncertainty) break;
     const double candidate = multipleOf(value, step);
     if (std::abs(candidate - value) <= uncertainty) return candidate == 0.0 ? 0.0 : candidate;
   }
