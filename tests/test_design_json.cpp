@@ -1,16 +1,22 @@
 // The designed tree in tree.json (frame, units, parameters, patterns beside
 // the explicit primitives), in tree.txt (named patterns) and report.json's
-// design section; render's round trip through tree.json.
+// design section; render's round trip through tree.json; a turned scan
+// through the main job.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
+#include "cli_helpers.h"
 #include "design/designed_tree.h"
 #include "design/part_frame.h"
 #include "io/design_json.h"
+#include "io/point_writer.h"
+#include "io/scan_reader.h"
 #include "io/text_export.h"
 #include "io/tree_json.h"
 #include "part_list.h"
@@ -92,6 +98,65 @@ TEST(DesignJson, ReportSaysWhatWasSnapped) {
     if (v.at("snapped")) largest = std::max(largest, std::abs(v.at("change").get<double>()));
   }
   EXPECT_EQ(r.at("largest_change").get<double>(), largest);
+}
+
+// The parameters a point holds (finite uncertainty) of a job's tree.json:
+// (value, uncertainty, snapped), in value order.
+struct HeldValue {
+  double value, uncertainty;
+  bool snapped;
+};
+std::vector<HeldValue> heldValues(const fs::path& treeJson) {
+  std::ifstream in(treeJson);
+  const auto j = nlohmann::json::parse(in);
+  std::vector<HeldValue> out;
+  for (const auto& p : j.at("parameters")) {
+    if (p.at("kind") == "count" || p.at("uncertainty").is_null()) continue;
+    out.push_back({p.at("value").get<double>(), p.at("uncertainty").get<double>(),
+                   p.at("snapped").get<bool>()});
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.value < b.value; });
+  return out;
+}
+
+// The main job on a bundled scan and on the same scan turned and moved: the
+// parameters the points hold are the same, the snapped ones exactly, the
+// others within their uncertainty; the frame carries the turn.
+TEST(DesignJson, TurnedScanGivesTheSameParametersThroughTheJob) {
+  const fs::path dir = test::freshTempDir("TurnedScanGivesTheSameParametersThroughTheJob");
+  for (const std::string name : {"plate_holes", "l_bracket"}) {
+    SCOPED_TRACE(name);
+    const fs::path scanPath = test::dataDir() / name / "scan.ply";
+    Scan scan = readScan(scanPath);
+    test::Rng rng(3);
+    const Mat3 r = test::randomRotation(rng);
+    const Vec3 t(12.5, -40.0, 7.0);
+    for (Vec3& p : scan.cloud.points) p = r * p + t;
+    for (Vec3& n : scan.cloud.normals) n = r * n;
+    const fs::path turned = dir / (name + "_turned.ply");
+    writePointCloudPly(turned, scan.cloud);
+    const fs::path a = dir / (name + "_a"), b = dir / (name + "_b");
+    ASSERT_EQ(run("'" + scanPath.string() + "' -o '" + a.string() + "'", dir, 600).code, 0);
+    ASSERT_EQ(run("'" + turned.string() + "' -o '" + b.string() + "'", dir, 600).code, 0);
+    const auto va = heldValues(a / "tree.json"), vb = heldValues(b / "tree.json");
+    ASSERT_EQ(va.size(), vb.size());
+    ASSERT_GE(va.size(), 10u);
+    for (std::size_t i = 0; i < va.size(); ++i) {
+      EXPECT_EQ(va[i].snapped, vb[i].snapped) << i << " " << va[i].value << " " << vb[i].value;
+      if (va[i].snapped && vb[i].snapped) {
+        EXPECT_EQ(va[i].value, vb[i].value) << i;
+      } else {
+        EXPECT_NEAR(va[i].value, vb[i].value, 2.0 * std::max(va[i].uncertainty, vb[i].uncertainty))
+            << i;
+      }
+    }
+    std::ifstream in(b / "tree.json");
+    const auto frame = nlohmann::json::parse(in).at("frame");
+    const auto axis = frame.at("axes").at(2);
+    const Vec3 z(axis.at(0).get<double>(), axis.at(1).get<double>(), axis.at(2).get<double>());
+    EXPECT_GT(std::abs(z.dot(r.col(2))), 1.0 - 1e-6);  // the parts' z is the world's z, turned
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace
