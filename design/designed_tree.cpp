@@ -124,6 +124,7 @@ class Designer {
     }
     chooseUnits();
     if (options_.snap) snap();
+    measureDatumOffset();
     mergeEqualSnapped();
     nameParameters();
     measure();
@@ -685,6 +686,19 @@ class Designer {
     for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
   }
 
+  void measureDatumOffset() {
+    Vec3 sum = Vec3::Zero(), weight = Vec3::Zero();
+    for (std::size_t i = 0; i < d_.parameters.size(); ++i) {
+      const DesignParameter& p = d_.parameters[i];
+      const int axis = int(paramSlots_[i].category);
+      if (axis > 2 || !p.snapped || !std::isfinite(p.uncertainty) || p.uncertainty <= 0.0) continue;
+      const double w = 1.0 / (p.uncertainty * p.uncertainty);
+      sum[axis] += w * (p.fitted - p.value);
+      weight[axis] += w;
+    }
+    for (int a = 0; a < 3; ++a) d_.datumOffset[a] = weight[a] > 0.0 ? sum[a] / weight[a] : 0.0;
+  }
+
   // The points' mean |f| to `tree`; each point's |f| into `each` when given.
   double meanDistance(const CsgTree& tree, std::vector<double>* each = nullptr) const {
     std::vector<double> g(localPoints_.size());
@@ -827,7 +841,21 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
   const std::span<const Vec3> points = used;
   PartFrame frame = partFrame(fitted, points, options.frame);
   DesignedTree d = designTree(fitted, frame, points, options);
-  if (!frame.spinFree) return d;
+  // The origin is a fitted face or axis, as off as its points leave it: moved
+  // to where the snapped positions put it, and the tree designed again.
+  const auto refined = [&](DesignedTree first, PartFrame f) {
+    const double d0 = exportExtent(fitted).diagonal();
+    if (points.empty() || first.datumOffset.norm() <= 1e-9 * d0) return first;
+    f.origin += f.rotation * first.datumOffset;
+    const double originTol = options.frame.originTolerance * d0;
+    for (int i = 0; i < 3; ++i) {
+      if (const auto v = simplestLength(f.origin[i], originTol, UnitSystem::Millimetre)) {
+        f.origin[i] = *v;
+      }
+    }
+    return designTree(fitted, f, points, options);
+  };
+  if (!frame.spinFree) return refined(std::move(d), frame);
   // A turned part: x through the first member of a bolt circle about the
   // main axis, so that a turned copy of the part gives the same values.
   const double tol = options.patternTolerance * exportExtent(fitted).diagonal();
@@ -847,9 +875,9 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
     spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
     frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);
     frame.spinFree = false;
-    return designTree(fitted, frame, points, options);
+    return refined(designTree(fitted, frame, points, options), frame);
   }
-  return d;
+  return refined(std::move(d), frame);
 }
 
 }  // namespace csgvox

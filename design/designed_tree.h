@@ -152,6 +152,10 @@ struct DesignedTree {
   double iouToFitted = 1.0;                   ///< voxel IoU of the designed tree against the fitted
   double meanDistanceFitted = 0.0;    ///< points' mean |f| to the fitted tree (0: no points)
   double meanDistanceDesigned = 0.0;  ///< points' mean |f| to the designed tree
+  /// Along each frame axis, the mean of (fitted − snapped) over the snapped
+  /// positions the points hold (weights 1/u²): how far the origin, itself
+  /// a fitted face or axis, lies from where the snapped values put it.
+  Vec3 datumOffset = Vec3::Zero();
 
   /// The designed tree in world coordinates (the fitted tree's structure,
   /// every leaf realised from the parameters' values and named as its

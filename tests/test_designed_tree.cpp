@@ -205,6 +205,35 @@ TEST(DesignedTree, PointsSetTheUncertainty) {
   EXPECT_GE(d.iouToFitted, 0.999);
 }
 
+// A noisy scan's datum face fitted 0.04 off (x = 40: the frame's x runs
+// from the hole's side, and its origin is that corner of the bounds): the
+// snapped sizes measured from it would carry the whole error to the far
+// faces. The origin moves to where the snapped
+// positions put it, and the designed block lies nearer the true one than
+// the fitted block does.
+TEST(DesignedTree, OriginMovesToWhereTheSnappedPositionsPutIt) {
+  const Box truthBlock{Vec3(20, 15, 5), Mat3::Identity(), Vec3(20, 15, 5)};  // [0,40]x[0,30]x[0,10]
+  const Cylinder hole{Vec3(12, 15, 5), Vec3::UnitZ(), 4, 14};
+  const CsgTree truth = CsgTree::subtract({CsgTree::leaf(truthBlock), CsgTree::leaf(hole)});
+  const Box fittedBlock{Vec3(20.02, 15, 5), Mat3::Identity(), Vec3(20.02, 15, 5)};  // x to 40.04
+  const CsgTree fitted = CsgTree::subtract({CsgTree::leaf(fittedBlock), CsgTree::leaf(hole)});
+  test::Rng rng(7);
+  std::normal_distribution<double> noise(0.0, 0.25);
+  std::vector<Vec3> points;
+  for (const Primitive& p : {Primitive(truthBlock), Primitive(hole)}) {
+    for (const Vec3& q : test::sampleSurface(p, 2.0).points) {
+      if (std::abs(truth.value(q)) < 1e-9) {
+        points.push_back(q + Vec3(noise(rng), noise(rng), noise(rng)));
+      }
+    }
+  }
+  const DesignedTree d = designTree(fitted, points);
+  const Aabb box = d.tree().root()->children.front()->primitive.bounds();
+  EXPECT_LT(std::abs(box.min.x() - 0.0), 0.03);
+  EXPECT_LT(std::abs(box.max.x() - 40.0), 0.03);
+  EXPECT_GT(test::treeIou(d.tree(), truth), test::treeIou(fitted, truth));
+}
+
 TEST(DesignedTree, RoleNames) {
   const DesignedTree d = designTree(part("flange"));
   std::set<std::string> roles;
