@@ -687,7 +687,9 @@ class Designer {
   }
 
   void measureDatumOffset() {
-    Vec3 sum = Vec3::Zero(), weight = Vec3::Zero();
+    // An offset below a tenth of the finest uncertainty along its axis is
+    // left alone (a clean scan's, at float noise): the design would not move.
+    Vec3 sum = Vec3::Zero(), weight = Vec3::Zero(), finest = Vec3::Constant(kInf);
     for (std::size_t i = 0; i < d_.parameters.size(); ++i) {
       const DesignParameter& p = d_.parameters[i];
       const int axis = int(paramSlots_[i].category);
@@ -695,8 +697,12 @@ class Designer {
       const double w = 1.0 / (p.uncertainty * p.uncertainty);
       sum[axis] += w * (p.fitted - p.value);
       weight[axis] += w;
+      finest[axis] = std::min(finest[axis], p.uncertainty);
     }
-    for (int a = 0; a < 3; ++a) d_.datumOffset[a] = weight[a] > 0.0 ? sum[a] / weight[a] : 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double offset = weight[a] > 0.0 ? sum[a] / weight[a] : 0.0;
+      d_.datumOffset[a] = std::abs(offset) >= 0.1 * finest[a] ? offset : 0.0;
+    }
   }
 
   // The points' mean |f| to `tree`; each point's |f| into `each` when given.

@@ -154,7 +154,8 @@ struct DesignedTree {
   double meanDistanceDesigned = 0.0;  ///< points' mean |f| to the designed tree
   /// Along each frame axis, the mean of (fitted − snapped) over the snapped
   /// positions the points hold (weights 1/u²): how far the origin, itself
-  /// a fitted face or axis, lies from where the snapped values put it.
+  /// a fitted face or axis, lies from where the snapped values put it (0
+  /// where that is below a tenth of the finest such uncertainty).
   Vec3 datumOffset = Vec3::Zero();
 
   /// The designed tree in world coordinates (the fitted tree's structure,
