@@ -149,7 +149,12 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     det.message = buf;
     return out;
   }
-  fitSurfaces(scan, out.detection);
+  // After a search on a subsample, the surfaces were pruned and split there
+  // (detectSurfaces): on all the points they are fitted, and the points
+  // assigned, only.
+  SurfaceFitOptions fit;
+  if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = false;
+  fitSurfaces(scan, out.detection, fit);
   lap(out.fitSeconds, out.fitCpuSeconds);
   out.regularization = regularizeSurfaces(out.detection);
   lap(out.regularizeSeconds, out.regularizeCpuSeconds);

@@ -22,15 +22,16 @@ struct SubsampleOptions {
 };
 
 /// Indices (ascending) of about options.points of `points`, spread evenly:
-/// the points are binned into cubic cells, and every cell keeps the same
-/// number q of its points (all of them where it holds fewer), chosen at
-/// random by the seed; q is the largest that keeps at most options.points.
-/// Dense regions are thinned, sparse ones kept. Cells are at least
-/// options.noiseCells x `noise` wide (scan units), so a noisy surface keeps
-/// its noise: a cell narrower than the band would keep the band's tails as
-/// often as its middle. All indices when there are no more than
-/// options.points points. The same input and seed give the same indices,
-/// whatever the number of threads.
+/// the points are binned into cubic cells, a cell's density is the largest
+/// count among it and its 26 neighbours, and each point is kept with
+/// probability min(1, q / density) (drawn from the seed and its index), q
+/// chosen so that about options.points remain. Dense regions are thinned to
+/// about q points per cell, sparse ones kept. Cells are at least
+/// options.noiseCells x `noise` wide (scan units), and a cell holding only
+/// the tail of a noise band is thinned as its neighbour holding the middle,
+/// so a noisy surface keeps its noise. All indices when there are no more
+/// than options.points points. The same input and seed give the same
+/// indices, whatever the number of threads.
 /// @throw std::invalid_argument when options.points is 0, options.cellSide is
 ///        not positive or options.noiseCells or `noise` is negative.
 std::vector<std::uint32_t> evenSubsample(std::span<const Vec3> points, double noise,

@@ -792,6 +792,7 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
   if (!report(0.95, "ransac")) return cancelled();
 
   result.surfaces = std::move(found);
+  result.searchedPoints = cloud.size();
   summarise(cloud, result);
   report(1.0, "ransac");
   return result;
@@ -802,10 +803,9 @@ constexpr std::uint64_t kSubsampleStream = 1000;
 
 // detectSurfaces on an even subsample of a large cloud, then every point
 // assigned. The noise is estimated on a stride subset of the subsample's
-// size, which keeps the noise's distribution (the subsample's cells, at
-// least 6 sigma wide, cut the band at their faces and keep a little more of
-// its tails: +8 % on a noisy 500 000-point scan); it sizes the cells and is
-// the detection's noise.
+// size (the estimate does not depend on the density, and a stride keeps the
+// noise's distribution as it is); it sizes the subsample's cells and is the
+// detection's noise.
 DetectionResult detectOnSubsample(const PointCloud& cloud, const DetectOptions& options,
                                   const ProgressCallback& progress) {
   const double diag = cloud.diagonal();
@@ -840,6 +840,9 @@ DetectionResult detectOnSubsample(const PointCloud& cloud, const DetectOptions& 
     return !progress || progress(0.95 * f, stage);
   };
   DetectionResult result = detectOnAll(sub, options, scaled, noise);
+  // The decisions that depend on the density are taken on the subsample.
+  if (result.ok()) fitSurfaces(sub, result);
+  result.searchedPoints = sub.size();
   result.diagonal = diag;
   result.assignment.assign(cloud.size(), -1);
   for (Surface& s : result.surfaces) s.inliers.clear();

@@ -85,6 +85,10 @@ struct DetectionResult {
   double normalThreshold = 0.9;  ///< normal agreement used (|cos|)
   std::size_t minPoints =
       0;  ///< fewest inliers a surface may keep (the last pass's minimum), count
+  /// Points RANSAC searched: all of them, or the even subsample's count for
+  /// a scan of more than DetectOptions::ransacPoints (then the surfaces are
+  /// fitted, split and pruned there, see detectSurfaces).
+  std::size_t searchedPoints = 0;
 
   /// True when status is Ok.
   bool ok() const { return status == Status::Ok; }
@@ -129,9 +133,13 @@ double estimateSpacing(const PointCloud& cloud);
 ///    dropped, points re-assigned, surfaces re-fitted).
 /// A scan of more than options.ransacPoints points is searched on an even
 /// subsample of that many (seeded by options.seed), with the noise, spacing
-/// and minimum support measured there; then every point of the scan is
+/// and minimum support measured there, and its surfaces are fitted there
+/// (fitSurfaces: the redundant ones dropped, stepped cylinders split, both
+/// of which depend on the density); then every point of the scan is
 /// assigned to the surface it lies on (reassignPoints), with the minimum
-/// support scaled to the whole scan.
+/// support scaled to the whole scan. A surface fit on the whole scan should
+/// then leave those decisions alone (detectAndFit runs it without
+/// removeRedundant and splitSteps).
 /// Surfaces are sorted by inlier count (largest first); each inlier belongs
 /// to exactly one surface. Plane normals agree with the majority of their
 /// inliers' normals; curved surfaces say whether they are convex.
