@@ -134,6 +134,8 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
     const SurfacesAndCandidates found = detectAndFit(scan.cloud, fo, {}, console.progress());
     if (!found.ok()) throw ParseError(scanPath.string() + ": " + found.detection.message);
     const double detectSeconds = watch.seconds();
+    StepTimes detectTimes;
+    detectTimes.add("detect", detectSeconds, watch.cpuSeconds());
     console.info("detection: " + std::to_string(found.detection.surfaces.size()) + " surfaces, " +
                  std::to_string(found.hypotheses.candidates.size()) + " candidates");
 
@@ -157,7 +159,7 @@ Command setupCompare(CLI::App& app, CommonOptions& common) {
       labels = rec.labels;
       OutputSet output(folder / name, jobFiles(), inputs);
       const nlohmann::ordered_json report =
-          writeJob(output, scanPath, scan, rec, settings, {{"detect", detectSeconds}}, console,
+          writeJob(output, scanPath, scan, rec, settings, detectTimes, console,
                    RunControl(0.0, console.progress()));
       output.commit();
       rows.push_back(row(name, wallSeconds, cpu, report));

@@ -43,14 +43,14 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
     Console console(common.quiet);
     common.subject = opt->scan;
     const fs::path scanPath(opt->scan);
-    nlohmann::ordered_json timings;
+    StepTimes timings;
     Stopwatch watch;
     ReadOptions ro;
     ro.seed = opt->job.reconstruct.seed;
     std::vector<fs::path> inputs = {scanPath};
     for (const std::string& more : opt->moreScans) inputs.emplace_back(more);
     const Scan scan = readScans(inputs, ro);
-    timings["read"] = watch.seconds();
+    timings.add("read", watch.seconds(), watch.cpuSeconds());
     console.info("read " + scanPath.string() +
                  (inputs.size() > 1 ? " and " + std::to_string(inputs.size() - 1) + " more" : "") +
                  ": " + describeScan(scan));
@@ -69,7 +69,7 @@ Command setupReconstruct(CLI::App& app, CommonOptions& common) {
           if (done) console.info(std::string(stage) + ": " + summary);
         },
         control);
-    for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
+    for (const StageTime& t : rec.timings) timings.add(t.stage, t.seconds, t.cpuSeconds);
     if (!rec.ok()) throw ParseError(scanPath.string() + ": " + rec.message);
     if (rec.timeLimitHit) {
       console.info(rec.method == Method::Gp

@@ -2,7 +2,13 @@
 // sizes and grid resolutions: time per pipeline stage, the tree's size, and
 // peak memory; then the two steps the CLI runs after the pipeline, meshing the
 // tree at res 160 (mesh.ply, without writing it) and the fit metrics.
-// Run: build/bench/bench_pipeline [data/<part>/tree.json] [noise]
+// Run: build/bench/bench_pipeline [data/<part>/tree.json] [noise] [--points N,N,...]
+//        [--res R,R,...] [--threads T,T,...]
+// Points default to 50k, 100k, 500k, 1M and 2M, resolutions to 64 and 128;
+// --threads runs every row at each thread count (tbb::global_control; 0 or
+// absent: all cores), so a stage's CPU and wall seconds at 1 and 2 threads
+// give its serial fraction. Each stage is printed with its wall and CPU
+// seconds (all threads).
 //
 // Or: build/bench/bench_pipeline --optimisation [data/<part>/tree.json]
 //       [points] [repeats] [threads]
@@ -28,7 +34,9 @@
 #include <cstdlib>
 #include <exception>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "bench_common.h"
 #include "core/nearest_neighbors.h"
@@ -56,16 +64,45 @@ double cpuSeconds() {
          1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
-// Seconds of one stage of reconstruct(), or -1 when it did not run.
-double stageSeconds(const Reconstruction& rec, const char* stage) {
+// Wall and CPU seconds of one stage of reconstruct(), or -1 when it did not run.
+const StageTime* findStage(const Reconstruction& rec, const char* stage) {
   for (const StageTime& t : rec.timings) {
-    if (t.stage == stage) return t.seconds;
+    if (t.stage == stage) return &t;
   }
-  return -1.0;
+  return nullptr;
+}
+double stageSeconds(const Reconstruction& rec, const char* stage) {
+  const StageTime* t = findStage(rec, stage);
+  return t ? t->seconds : -1.0;
+}
+double stageCpuSeconds(const Reconstruction& rec, const char* stage) {
+  const StageTime* t = findStage(rec, stage);
+  return t ? t->cpuSeconds : -1.0;
+}
+
+// The stages of a row, in order.
+constexpr const char* kStages[] = {"detect",           "hypotheses",   "labels",
+                                   "description_sets", "optimisation", "repair"};
+
+// "1,2,4" as numbers.
+std::vector<std::size_t> numberList(const std::string& text) {
+  std::vector<std::size_t> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    out.push_back(std::size_t(std::stoull(text.substr(start, comma - start))));
+    start = comma + 1;
+  }
+  return out;
 }
 
 // One row of the table: sample, reconstruct, mesh, fit. Returns the exit code.
-int runRow(const CsgTree& part, std::size_t points, int resolution, double noise) {
+int runRow(const CsgTree& part, std::size_t points, int resolution, double noise, int threads) {
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0) {
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  std::size_t(threads));
+  }
   SampleOptions so;
   so.points = points;
   so.noise = noise;
@@ -99,12 +136,13 @@ int runRow(const CsgTree& part, std::size_t points, int resolution, double noise
     fit = seconds(t);
     if (triangles.triangles.empty() || metrics.points != scan.size()) return 1;
   }
-  std::printf(
-      "%8zu %4d %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %6zu %9.0f | %9.3f %9.3f %9.3f %9.0f",
-      points, resolution, stageSeconds(rec, "detect"), stageSeconds(rec, "hypotheses"),
-      stageSeconds(rec, "labels"), stageSeconds(rec, "description_sets"),
-      stageSeconds(rec, "optimisation"), total, cpu, rec.tree.primitiveCount(), pipelinePeak, mesh,
-      fit, rec.ok() ? total + mesh + fit : -1.0, peakMiB());
+  std::printf("%8zu %4d %3d", points, resolution, threads);
+  for (const char* stage : kStages) {
+    std::printf(" %7.2f/%-7.2f", stageSeconds(rec, stage), stageCpuSeconds(rec, stage));
+  }
+  std::printf(" %7.2f/%-7.2f %6zu %9.0f | %9.3f %9.3f %9.3f %9.0f", total, cpu,
+              rec.tree.primitiveCount(), pipelinePeak, mesh, fit,
+              rec.ok() ? total + mesh + fit : -1.0, peakMiB());
   if (!rec.ok()) std::printf("  (%s)", rec.message.c_str());
   std::printf("\n");
   std::fflush(stdout);
@@ -176,7 +214,7 @@ int runOptimisation(const CsgTree& part, std::size_t points, int repeats) {
 int run(int argc, char** argv) {
   if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
     std::printf(
-        "usage: %s [TREE.json] [NOISE]\n"
+        "usage: %s [TREE.json] [NOISE] [--points N,...] [--res R,...] [--threads T,...]\n"
         "       %s --optimisation [TREE.json] [POINTS] [REPEATS] [THREADS]\n"
         "TREE.json: the part to sample (default data/housing_complex/tree.json); NOISE: "
         "Gaussian position noise, sigma as a fraction of D\n",
@@ -196,27 +234,46 @@ int run(int argc, char** argv) {
     }
     return runOptimisation(readTreeJson(std::filesystem::path(path)), points, repeats);
   }
-  const std::string treePath =
-      argc > 1 ? argv[1] : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
-  const double noise = argc > 2 ? std::atof(argv[2]) : 0.0;
+  std::vector<std::string> positional;
+  std::vector<std::size_t> pointCounts = {50000, 100000, 500000, 1000000, 2000000};
+  std::vector<std::size_t> resolutions = {64, 128}, threadCounts = {0};
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    std::vector<std::size_t>* list = arg == "--points"    ? &pointCounts
+                                     : arg == "--res"     ? &resolutions
+                                     : arg == "--threads" ? &threadCounts
+                                                          : nullptr;
+    if (!list) {
+      positional.push_back(arg);
+      continue;
+    }
+    if (a + 1 >= argc) throw std::invalid_argument(arg + " needs a comma-separated list");
+    *list = numberList(argv[++a]);
+  }
+  const std::string treePath = !positional.empty()
+                                   ? positional[0]
+                                   : std::string(CSGVOX_DATA_DIR) + "/housing_complex/tree.json";
+  const double noise = positional.size() > 1 ? std::atof(positional[1].c_str()) : 0.0;
   const CsgTree part = readTreeJson(std::filesystem::path(treePath));
   std::printf("part %s, noise %.4f D, %zu primitives\n", treePath.c_str(), noise,
               part.primitiveCount());
   std::printf(
-      "pipeline stages and total (reconstruct()), wall-clock seconds; cpu_s: CPU seconds "
-      "of reconstruct(), all threads\n");
+      "pipeline stages and total (reconstruct()): wall-clock / CPU seconds (all threads); "
+      "thr: threads (0: all cores)\n");
   std::printf(
       "then what the CLI runs after it: meshTree at res 160, evaluateFit (100k samples); "
       "e2e = total + mesh + fit\n");
   std::printf(
       "peak memory per row, each row in a child process of its own "
       "(pipe: sampling + pipeline; peak: also mesh + fit); -1: not run\n");
-  std::printf("%8s %4s %9s %9s %9s %9s %9s %9s %9s %6s %9s | %9s %9s %9s %9s\n", "points", "res",
-              "detect_s", "hypoth_s", "labels_s", "dsets_s", "optim_s", "total_s", "cpu_s", "prims",
-              "pipe_MiB", "mesh160_s", "fit_s", "e2e_s", "peak_MiB");
+  std::printf("%8s %4s %3s %15s %15s %15s %15s %15s %15s %15s %6s %9s | %9s %9s %9s %9s\n",
+              "points", "res", "thr", "detect", "hypotheses", "labels", "dsets", "optimisation",
+              "repair", "total", "prims", "pipe_MiB", "mesh160_s", "fit_s", "e2e_s", "peak_MiB");
   int failures = 0;
-  for (std::size_t n : {50000u, 100000u, 500000u}) {
-    for (int res : {64, 128}) {
+  for (const std::size_t n : pointCounts) {
+    for (const std::size_t resolution : resolutions) {
+      for (const std::size_t threads : threadCounts) {
+      const int res = int(resolution);
       std::fflush(stdout);  // the child must not print the parent's buffer again
       const pid_t child = fork();
       if (child < 0) {
@@ -226,7 +283,7 @@ int run(int argc, char** argv) {
       if (child == 0) {
         int code = 1;
         try {
-          code = runRow(part, n, res, noise);
+          code = runRow(part, n, res, noise, int(threads));
         } catch (const std::exception& e) {
           std::printf("%8zu %4d failed: %s\n", n, res, e.what());
         }
@@ -243,6 +300,7 @@ int run(int argc, char** argv) {
                     WIFSIGNALED(status) ? WTERMSIG(status) : 0);
       }
       if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) ++failures;
+      }
     }
   }
   return failures == 0 ? 0 : 1;

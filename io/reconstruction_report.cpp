@@ -214,9 +214,12 @@ void tail(Json& report, const CsgTree& tree, const ReportContext& ctx) {
   report["metrics"] = metricsJson(ctx.metrics, ctx.scan->cloud.size());
   report["warnings"] = ctx.warnings;
   report["outputs"] = ctx.outputs;
-  report["timings_s"] = ctx.timings;
+  report["timings_s"] = ctx.timings.wall;
   // The repair stage's old name, kept for one release.
-  if (ctx.timings.contains("repair")) report["timings_s"]["refine"] = ctx.timings["repair"];
+  if (ctx.timings.wall.contains("repair")) {
+    report["timings_s"]["refine"] = ctx.timings.wall["repair"];
+  }
+  report["cpu_s"] = ctx.timings.cpu;
 }
 
 // The voxel stage's sections, shared by the voxel and hybrid methods.

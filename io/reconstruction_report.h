@@ -24,6 +24,19 @@ struct TreeMetrics {
   Fitness fitness;                ///< Eq. 7 on every scan point (min/max, the gp tolerances)
 };
 
+/// Seconds of a job's steps, as report.json gives them: `wall` (timings_s)
+/// and `cpu` (cpu_s: CPU seconds of the process, all threads), each an
+/// object of step name to seconds in the order the steps ran.
+struct StepTimes {
+  nlohmann::ordered_json wall = nlohmann::ordered_json::object();  ///< wall-clock seconds per step
+  nlohmann::ordered_json cpu = nlohmann::ordered_json::object();   ///< CPU seconds per step
+  /// Records one step's seconds (a step recorded again is overwritten).
+  void add(const std::string& step, double wallSeconds, double cpuSeconds) {
+    wall[step] = wallSeconds;
+    cpu[step] = cpuSeconds;
+  }
+};
+
 /// What every report holds besides the method's own part.
 struct ReportContext {
   std::filesystem::path scanPath;  ///< the scan's file, as given
@@ -32,13 +45,13 @@ struct ReportContext {
   TreeMetrics metrics;             ///< the tree measured against the scan
   nlohmann::ordered_json warnings = nlohmann::ordered_json::array();  ///< one line each
   std::vector<std::string> outputs;                                   ///< files written
-  nlohmann::ordered_json timings = nlohmann::ordered_json::object();  ///< seconds per step
+  StepTimes timings;  ///< wall-clock and CPU seconds per step
 };
 
 /// report.json of a reconstruction built by `rec.method` with `options`:
 /// status, input, parameters, grid, counts, the method's own sections
 /// (hybrid: repair and finish; gp: partitioning), tree, metrics, warnings,
-/// outputs and timings_s.
+/// outputs, timings_s and cpu_s.
 /// @throw std::invalid_argument when rec holds no method result or ctx no scan.
 nlohmann::ordered_json reconstructionReport(const Reconstruction& rec,
                                             const ReconstructOptions& options,
@@ -55,7 +68,7 @@ struct ImportedTree {
 
 /// report.json of an imported tree: the scan-side settings of `options`,
 /// the grid, the detection's surface count, tree, metrics, warnings,
-/// outputs and timings_s.
+/// outputs, timings_s and cpu_s.
 /// @throw std::invalid_argument when the tree, grid or scan is missing.
 nlohmann::ordered_json importedTreeReport(const ImportedTree& imported,
                                           const ReconstructOptions& options,

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "core/cpu_time.h"
 #include "core/progress.h"
 
 namespace csgvox {
@@ -40,16 +41,20 @@ class Console {
   std::chrono::steady_clock::time_point start_;
 };
 
-/// Wall-clock stopwatch for per-stage timings.
+/// Stopwatch for per-stage timings: wall-clock and process CPU seconds.
 class Stopwatch {
  public:
-  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  Stopwatch() : start_(std::chrono::steady_clock::now()), cpuStart_(processCpuSeconds()) {}
+  /// Wall-clock seconds since construction.
   double seconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
+  /// CPU seconds of the process (all threads) since construction.
+  double cpuSeconds() const { return processCpuSeconds() - cpuStart_; }
 
  private:
   std::chrono::steady_clock::time_point start_;
+  double cpuStart_;
 };
 
 }  // namespace csgvox

@@ -52,7 +52,7 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobOptions& op
 // warning in the report), not the job.
 void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
                      const CsgTree* fitted, const TriangleMesh& mesh, const JobOptions& options,
-                     nlohmann::ordered_json& timings, nlohmann::ordered_json& warnings,
+                     StepTimes& timings, nlohmann::ordered_json& warnings,
                      const RunControl& control) {
   Stopwatch watch;
   if (!stepExportAvailable()) {
@@ -84,14 +84,14 @@ void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
       }
     }
   }
-  timings["step"] = watch.seconds();
+  timings.add("step", watch.seconds(), watch.cpuSeconds());
   if (!options.preview) {
     output.skip("preview.png");
     return;
   }
   watch = Stopwatch();
   writePng(output.path("preview.png"), renderPreview(tree, mesh, &scan.cloud).image);
-  timings["preview"] = watch.seconds();
+  timings.add("preview", watch.seconds(), watch.cpuSeconds());
 }
 
 // Every file of the job but report.json; `ctx` gains the export, step and
@@ -117,7 +117,7 @@ void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
   mo.resolution = options.meshResolution;
   const TriangleMesh mesh = meshTree(tree, mo, control);
   writeMesh(output.path("mesh.ply"), mesh);
-  ctx.timings["export"] = watch.seconds();
+  ctx.timings.add("export", watch.seconds(), watch.cpuSeconds());
   writeCadOutputs(output, scan, tree, design ? &design->fitted : nullptr, mesh, options,
                   ctx.timings, ctx.warnings, control);
 }
@@ -134,7 +134,7 @@ std::vector<std::string> writtenFiles(const OutputSet& output) {
 }
 
 ReportContext contextOf(const std::filesystem::path& scanPath, const Scan& scan,
-                        const JobOptions& options, nlohmann::ordered_json timings) {
+                        const JobOptions& options, StepTimes timings) {
   ReportContext ctx;
   ctx.scanPath = scanPath;
   ctx.scan = &scan;
@@ -148,7 +148,7 @@ void measureInto(ReportContext& ctx, const CsgTree& tree, double voxelIou,
                  const JobOptions& options, const Console& console) {
   Stopwatch watch;
   ctx.metrics = measureTree(tree, *ctx.scan, voxelIou, options, ctx.warnings, console);
-  ctx.timings["metrics"] = watch.seconds();
+  ctx.timings.add("metrics", watch.seconds(), watch.cpuSeconds());
   if (const auto& fit = ctx.metrics.fit) {
     console.info(fmt("fit: Chamfer %.3g %% of D, RMSE %.3g %% of D",
                      100 * fit->chamfer / fit->diagonal, 100 * fit->rmse / fit->diagonal));
@@ -181,10 +181,10 @@ nlohmann::ordered_json writeFilesAndReport(OutputSet& output, ReportContext ctx,
                                            const RunControl& control, const BuildReport& build) {
   Stopwatch watch;
   const std::optional<DesignedTree> design = designFor(fitted, *ctx.scan, options, ctx, console);
-  const double designSeconds = watch.seconds();
+  const double designSeconds = watch.seconds(), designCpuSeconds = watch.cpuSeconds();
   const CsgTree tree = design ? design->tree() : fitted;
   if (design) {
-    ctx.timings["design"] = designSeconds;
+    ctx.timings.add("design", designSeconds, designCpuSeconds);
     console.info(fmt("design: %.0f parameters, %.0f snapped", double(design->parameters.size()),
                      double(design->snappedCount())));
   }
@@ -221,7 +221,7 @@ TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
 
 nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& scanPath,
                                 const Scan& scan, const Reconstruction& rec,
-                                const JobOptions& options, nlohmann::ordered_json timings,
+                                const JobOptions& options, StepTimes timings,
                                 const Console& console, const RunControl& control) {
   return writeFilesAndReport(output, contextOf(scanPath, scan, options, std::move(timings)),
                              rec.tree, rec.voxelIou(), options, console, control,
@@ -235,7 +235,7 @@ nlohmann::ordered_json writeImportedJob(OutputSet& output, const std::filesystem
                                         double voxelIou, const JobOptions& options,
                                         const Console& console, const RunControl& control) {
   return writeFilesAndReport(
-      output, contextOf(scanPath, scan, options, nlohmann::ordered_json::object()), *imported.tree,
+      output, contextOf(scanPath, scan, options, StepTimes{}), *imported.tree,
       voxelIou, options, console, control, [&](const ReportContext& ctx) {
         return importedTreeReport(imported, options.reconstruct, ctx);
       });
@@ -243,7 +243,7 @@ nlohmann::ordered_json writeImportedJob(OutputSet& output, const std::filesystem
 
 nlohmann::ordered_json reportWithoutFiles(const std::filesystem::path& scanPath, const Scan& scan,
                                           const Reconstruction& rec, const JobOptions& options,
-                                          nlohmann::ordered_json timings, const Console& console) {
+                                          StepTimes timings, const Console& console) {
   ReportContext ctx = contextOf(scanPath, scan, options, std::move(timings));
   measureInto(ctx, rec.tree, rec.voxelIou(), options, console);
   return reconstructionReport(rec, options.reconstruct, ctx);

@@ -46,8 +46,8 @@ TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
 
 /// Writes a finished reconstruction's files into `output` (not committed)
 /// and returns its report (also written as report.json, whose `outputs`
-/// lists the files written). `timings` holds the seconds of the steps before
-/// (read, ...); export, step, preview and metrics are added. preview.png is
+/// lists the files written). `timings` holds the wall-clock and CPU seconds of
+/// the steps before (read, ...); export, step, preview and metrics are added. preview.png is
 /// skipped with options.preview off; tree.step is skipped, with one error
 /// line on stderr naming the node and a warning in the report, when
 /// OpenCASCADE cannot build the solid (or the build has no OpenCASCADE):
@@ -56,7 +56,7 @@ TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
 /// not apply: the files of a finished tree are always written whole).
 nlohmann::ordered_json writeJob(OutputSet& output, const std::filesystem::path& scanPath,
                                 const Scan& scan, const Reconstruction& rec,
-                                const JobOptions& options, nlohmann::ordered_json timings,
+                                const JobOptions& options, StepTimes timings,
                                 const Console& console, const RunControl& control = {});
 
 /// As writeJob, for a tree read from a file (`compare --import-gp`) and
@@ -70,6 +70,6 @@ nlohmann::ordered_json writeImportedJob(OutputSet& output, const std::filesystem
 /// Python module returns): report.json's content with no outputs.
 nlohmann::ordered_json reportWithoutFiles(const std::filesystem::path& scanPath, const Scan& scan,
                                           const Reconstruction& rec, const JobOptions& options,
-                                          nlohmann::ordered_json timings, const Console& console);
+                                          StepTimes timings, const Console& console);
 
 }  // namespace csgvox

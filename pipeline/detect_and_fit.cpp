@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/cpu_time.h"
 #include "primitives/bounding_box.h"
 #include "primitives/surface_fit.h"
 
@@ -107,10 +108,18 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   SurfacesAndCandidates out;
   if (onStage) onStage("detect", false, {});
   Clock::time_point start = Clock::now();
+  double cpu = processCpuSeconds();
+  // Seconds and CPU seconds since the last call (or the start).
+  const auto lap = [&](double& wall, double& cpuSeconds) {
+    wall = secondsSince(start);
+    const double now = processCpuSeconds();
+    cpuSeconds = now - cpu;
+    cpu = now;
+    start = Clock::now();
+  };
   DetectOptions dopt = options.detect;
   dopt.seed = options.seed;
   out.detection = detectSurfaces(scan, dopt, progress);
-  out.detectSeconds = secondsSince(start);
   if (!out.detection.ok()) return out;
   DetectionResult& det = out.detection;
   // The noise estimate is local: its neighbourhoods shrink as the points
@@ -129,6 +138,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     }
     spread = std::max(spread, estimateNoise(subset));
   }
+  lap(out.detectSeconds, out.detectCpuSeconds);
   if (spread > options.maxNoise * det.diagonal) {
     char buf[256];
     std::snprintf(buf, sizeof(buf),
@@ -139,16 +149,19 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     det.message = buf;
     return out;
   }
-  start = Clock::now();
-  fitSurfaces(scan, out.detection);
-  out.fitSeconds = secondsSince(start);
-  start = Clock::now();
+  // After a search on a subsample, the surfaces were pruned and split there
+  // (detectSurfaces): on all the points they are fitted, and the points
+  // assigned, only.
+  SurfaceFitOptions fit;
+  if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = false;
+  fitSurfaces(scan, out.detection, fit);
+  lap(out.fitSeconds, out.fitCpuSeconds);
   out.regularization = regularizeSurfaces(out.detection);
-  out.regularizeSeconds = secondsSince(start);
+  lap(out.regularizeSeconds, out.regularizeCpuSeconds);
   if (onStage) onStage("detect", true, out.detection.message);
 
   if (onStage) onStage("hypotheses", false, {});
-  start = Clock::now();
+  lap(out.hypothesisSeconds, out.hypothesisCpuSeconds);  // the stage callback's time is not counted
   const OrientedBox box = gridBox(scan, out.detection.surfaces, options.seed);
   const auto gridAt = [&](int resolution) {
     GridOptions go;
@@ -206,7 +219,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     layGrid(options.resolution);  // the finer grid does not fit: the asked one
     finerNote.clear();
   }
-  out.hypothesisSeconds = secondsSince(start);
+  lap(out.hypothesisSeconds, out.hypothesisCpuSeconds);
   if (onStage) {
     onStage("hypotheses", true,
             std::to_string(out.hypotheses.candidates.size()) + " candidates" + finerNote);

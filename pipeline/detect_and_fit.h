@@ -71,6 +71,10 @@ struct SurfacesAndCandidates {
   double fitSeconds = 0.0;              ///< the surface fit (Ceres)
   double regularizeSeconds = 0.0;       ///< regularisation
   double hypothesisSeconds = 0.0;       ///< grid frame and hypotheses
+  double detectCpuSeconds = 0.0;        ///< CPU seconds (all threads) of each of the four
+  double fitCpuSeconds = 0.0;           ///< ... the surface fit
+  double regularizeCpuSeconds = 0.0;    ///< ... regularisation
+  double hypothesisCpuSeconds = 0.0;    ///< ... grid frame and hypotheses
 
   bool ok() const { return detection.ok(); }
 };

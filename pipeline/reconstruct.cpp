@@ -7,6 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/cpu_time.h"
 #include "core/nearest_neighbors.h"
 #include "core/run_control.h"
 
@@ -27,11 +28,12 @@ class StageClock {
   void start(std::string_view stage) {
     stage_ = stage;
     start_ = Clock::now();
+    cpuStart_ = processCpuSeconds();
     if (onStage_) onStage_(stage_, false, {});
   }
   void finish(const std::string& summary) {
     const double s = std::chrono::duration<double>(Clock::now() - start_).count();
-    out_.timings.push_back({std::string(stage_), s});
+    out_.timings.push_back({std::string(stage_), s, processCpuSeconds() - cpuStart_});
     if (onStage_) onStage_(stage_, true, summary);
   }
 
@@ -40,6 +42,7 @@ class StageClock {
   const StageCallback& onStage_;
   std::string_view stage_;
   Clock::time_point start_;
+  double cpuStart_ = 0.0;
 };
 
 }  // namespace
@@ -321,8 +324,9 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
     return out;
   }
   out.timings.push_back(
-      {"detect", found.detectSeconds + found.fitSeconds + found.regularizeSeconds});
-  out.timings.push_back({"hypotheses", found.hypothesisSeconds});
+      {"detect", found.detectSeconds + found.fitSeconds + found.regularizeSeconds,
+       found.detectCpuSeconds + found.fitCpuSeconds + found.regularizeCpuSeconds});
+  out.timings.push_back({"hypotheses", found.hypothesisSeconds, found.hypothesisCpuSeconds});
   return afterDetection(std::move(out), std::move(found), scan, options, onStage, control);
 }
 

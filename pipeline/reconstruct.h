@@ -103,7 +103,8 @@ void validate(const ReconstructOptions& options);
 /// Seconds spent in one stage.
 struct StageTime {
   std::string stage;
-  double seconds = 0.0;
+  double seconds = 0.0;     ///< wall-clock seconds
+  double cpuSeconds = 0.0;  ///< CPU seconds of the process, all threads
 };
 
 /// What the voxel method built.

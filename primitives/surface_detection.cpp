@@ -25,6 +25,7 @@
 #include "core/seed.h"
 #include "core/statistics.h"
 #include "primitives/cgal_kernel.h"
+#include "primitives/even_subsample.h"
 #include "primitives/surface_fit.h"
 
 namespace csgvox {
@@ -223,7 +224,8 @@ void validate(const PointCloud& cloud, const DetectOptions& o) {
       !(o.spacingFactor >= 0.0) || !positive(o.maxEpsilon) || !(o.normalThreshold >= 0.0) ||
       !(o.normalThreshold <= 1.0) || !(o.minPoints >= 0.0) || !(o.minPoints < 1.0) ||
       !(o.probability > 0.0) || !(o.probability < 1.0) || o.passes < 1 ||
-      !(o.laterPassMinPoints > 0.0) || !(o.laterPassMinPoints <= 1.0)) {
+      !(o.laterPassMinPoints > 0.0) || !(o.laterPassMinPoints <= 1.0) ||
+      (o.ransacPoints > 0 && o.ransacPoints < 100)) {
     throw std::invalid_argument("detectSurfaces: an option is out of range");
   }
 }
@@ -538,10 +540,12 @@ double estimateSpacing(const PointCloud& cloud, const NearestNeighbors& nn) {
 
 // Scale-free parameters: relative to D (result.diagonal), raised to what the
 // noise and the sampling density require.
-void setScales(const PointCloud& cloud, const DetectOptions& options, DetectionResult& result) {
+// A non-negative `noise` is the noise sigma measured beforehand.
+void setScales(const PointCloud& cloud, const DetectOptions& options, double noise,
+               DetectionResult& result) {
   const double diag = result.diagonal;
   const NearestNeighbors nn(cloud.points);
-  result.noise = estimateNoise(cloud, nn, kNoiseNeighbors);
+  result.noise = noise >= 0.0 ? noise : estimateNoise(cloud, nn, kNoiseNeighbors);
   result.normalNoise = estimateNormalNoise(cloud, nn);
   const double spacing = estimateSpacing(cloud, nn);
   result.epsilon = std::max(options.epsilon * diag, std::min(options.noiseFactor * result.noise,
@@ -711,10 +715,13 @@ double estimateSpacing(const PointCloud& cloud) {
   return estimateSpacing(cloud, NearestNeighbors(cloud.points));
 }
 
-DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& options,
-                               const ProgressCallback& progress) {
+namespace {
+
+// detectSurfaces on all the points of a validated cloud; a non-negative
+// `noise` is its noise sigma, measured beforehand.
+DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& options,
+                            const ProgressCallback& progress, double noise = -1.0) {
   using Status = DetectionResult::Status;
-  validate(cloud, options);
   DetectionResult result;
   result.assignment.assign(cloud.size(), -1);
   result.normalThreshold = options.normalThreshold;
@@ -736,7 +743,7 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
   }
   if (!report(0.0, "noise")) return cancelled();
 
-  setScales(cloud, options, result);
+  setScales(cloud, options, noise, result);
 
   if (options.enabled.empty()) {
     result.status = Status::NoSurfaces;
@@ -785,9 +792,86 @@ DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& opt
   if (!report(0.95, "ransac")) return cancelled();
 
   result.surfaces = std::move(found);
+  result.searchedPoints = cloud.size();
   summarise(cloud, result);
   report(1.0, "ransac");
   return result;
+}
+
+// The seed of the subsample, apart from those of the RANSAC passes.
+constexpr std::uint64_t kSubsampleStream = 1000;
+
+// detectSurfaces on an even subsample of a large cloud, then every point
+// assigned. The noise is estimated on a stride subset of the subsample's
+// size (the estimate does not depend on the density, and a stride keeps the
+// noise's distribution as it is); it sizes the subsample's cells and is the
+// detection's noise.
+DetectionResult detectOnSubsample(const PointCloud& cloud, const DetectOptions& options,
+                                  const ProgressCallback& progress) {
+  const double diag = cloud.diagonal();
+  if (std::string why = degeneracy(cloud, diag); !why.empty()) {
+    DetectionResult result;
+    result.assignment.assign(cloud.size(), -1);
+    result.diagonal = diag;
+    result.normalThreshold = options.normalThreshold;
+    result.status = DetectionResult::Status::DegenerateInput;
+    result.message = "cannot detect surfaces: " + why;
+    return result;
+  }
+  PointCloud stride;
+  for (std::uint32_t i : strideSubset(cloud.size(), options.ransacPoints)) {
+    stride.points.push_back(cloud.points[i]);
+    stride.normals.push_back(cloud.normals[i]);
+  }
+  const double noise = estimateNoise(stride, kNoiseNeighbors);
+  stride = {};
+  SubsampleOptions so;
+  so.points = options.ransacPoints;
+  so.seed = mixSeed(options.seed, kSubsampleStream);
+  const std::vector<std::uint32_t> chosen = evenSubsample(cloud.points, noise, so);
+  PointCloud sub;
+  sub.points.reserve(chosen.size());
+  sub.normals.reserve(chosen.size());
+  for (std::uint32_t i : chosen) {
+    sub.points.push_back(cloud.points[i]);
+    sub.normals.push_back(cloud.normals[i]);
+  }
+  const auto scaled = [&](double f, std::string_view stage) {
+    return !progress || progress(0.95 * f, stage);
+  };
+  DetectionResult result = detectOnAll(sub, options, scaled, noise);
+  // The decisions that depend on the density are taken on the subsample.
+  if (result.ok()) fitSurfaces(sub, result);
+  result.searchedPoints = sub.size();
+  result.diagonal = diag;
+  result.assignment.assign(cloud.size(), -1);
+  for (Surface& s : result.surfaces) s.inliers.clear();
+  if (!result.ok()) return result;
+  // The least support, the same fraction of all points as of the subsample's.
+  result.minPoints = std::max<std::size_t>(
+      options.minPointsFloor,
+      std::size_t(std::llround(double(result.minPoints) * double(cloud.size()) /
+                               double(sub.size()))));
+  reassignPoints(cloud, result, result.minPoints, false);
+  summarise(cloud, result);
+  result.message += "; searched on " + std::to_string(sub.size()) + " of the " +
+                    std::to_string(cloud.size()) + " points";
+  if (progress && !progress(1.0, "ransac")) {
+    result.status = DetectionResult::Status::Cancelled;
+    result.message = "surface detection was cancelled";
+  }
+  return result;
+}
+
+}  // namespace
+
+DetectionResult detectSurfaces(const PointCloud& cloud, const DetectOptions& options,
+                               const ProgressCallback& progress) {
+  validate(cloud, options);
+  if (options.ransacPoints > 0 && cloud.size() > options.ransacPoints) {
+    return detectOnSubsample(cloud, options, progress);
+  }
+  return detectOnAll(cloud, options, progress);
 }
 
 }  // namespace csgvox

@@ -53,6 +53,12 @@ struct DetectOptions {
   double laterPassMinPoints =
       0.5;  ///< min-points factor of each later pass relative to the previous one (ratio)
   std::uint64_t seed = 1;  ///< random seed; the same seed and input give the same result
+  /// A scan of more points is searched on an even subsample of about this
+  /// many (evenSubsample: cells at least 6 x the noise wide), and then every
+  /// point goes to the surface that explains it: the search costs the same
+  /// and its thresholds stay put whatever the density (count; 0: always all
+  /// points).
+  std::size_t ransacPoints = 100000;
 };
 
 /// Surfaces found in a scan, with the point-to-surface assignment.
@@ -79,6 +85,10 @@ struct DetectionResult {
   double normalThreshold = 0.9;  ///< normal agreement used (|cos|)
   std::size_t minPoints =
       0;  ///< fewest inliers a surface may keep (the last pass's minimum), count
+  /// Points RANSAC searched: all of them, or the even subsample's count for
+  /// a scan of more than DetectOptions::ransacPoints (then the surfaces are
+  /// fitted, split and pruned there, see detectSurfaces).
+  std::size_t searchedPoints = 0;
 
   /// True when status is Ok.
   bool ok() const { return status == Status::Ok; }
@@ -121,6 +131,15 @@ double estimateSpacing(const PointCloud& cloud);
 ///    penalty: a narrow plane strip is a plane, not a large cylinder), then
 ///    settles all surfaces so far with fitSurfaces (redundant ones
 ///    dropped, points re-assigned, surfaces re-fitted).
+/// A scan of more than options.ransacPoints points is searched on an even
+/// subsample of that many (seeded by options.seed), with the noise, spacing
+/// and minimum support measured there, and its surfaces are fitted there
+/// (fitSurfaces: the redundant ones dropped, stepped cylinders split, both
+/// of which depend on the density); then every point of the scan is
+/// assigned to the surface it lies on (reassignPoints), with the minimum
+/// support scaled to the whole scan. A surface fit on the whole scan should
+/// then leave those decisions alone (detectAndFit runs it without
+/// removeRedundant and splitSteps).
 /// Surfaces are sorted by inlier count (largest first); each inlier belongs
 /// to exactly one surface. Plane normals agree with the majority of their
 /// inliers' normals; curved surfaces say whether they are convex.

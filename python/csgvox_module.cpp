@@ -104,10 +104,10 @@ Result reconstructArrays(const Array& points, const std::optional<Array>& normal
     Stopwatch watch;
     const Scan scan = scanFromArrays(std::move(p), std::move(n), "points", ro);
     options.detect.estimatedNormals = scan.info.normalsEstimated;
-    nlohmann::ordered_json timings;
-    timings["read"] = watch.seconds();
+    StepTimes timings;
+    timings.add("read", watch.seconds(), watch.cpuSeconds());
     const Reconstruction rec = reconstruct(scan.cloud, options, {}, RunControl(timeLimit));
-    for (const StageTime& t : rec.timings) timings[t.stage] = t.seconds;
+    for (const StageTime& t : rec.timings) timings.add(t.stage, t.seconds, t.cpuSeconds);
     if (!rec.ok()) throw ParseError("points: " + rec.message);
     const Console quiet(true);
     report = reportWithoutFiles("<array>", scan, rec, job, timings, quiet);

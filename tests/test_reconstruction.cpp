@@ -6,6 +6,7 @@
 // only shrinks.
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <chrono>
 #include <cstdio>
@@ -120,6 +121,29 @@ TEST(Reconstruction, SameSeedSameTree) {
   if (a.ok()) {
     EXPECT_EQ(treeNodeJson(a.tree), treeNodeJson(b.tree));
   }
+}
+
+// The tree of a reconstruction run with at most `threads` worker threads.
+std::string treeAtThreads(const PointCloud& cloud, const ReconstructOptions& o, int threads) {
+  const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                  std::size_t(threads));
+  const Reconstruction r = reconstruct(cloud, o);
+  EXPECT_TRUE(r.ok()) << r.message;
+  return treeNodeJson(r.tree);
+}
+
+TEST(Reconstruction, SameTreeAtOneAndTwoThreads) {
+  const Scan scan = readScan(test::dataDir() / "housing_complex" / "scan_noisy.ply");
+  ReconstructOptions o;
+  EXPECT_EQ(treeAtThreads(scan.cloud, o, 1), treeAtThreads(scan.cloud, o, 2));
+  EXPECT_EQ(treeAtThreads(scan.cloud, o, 1), treeAtThreads(scan.cloud, o, 3));
+}
+
+TEST(Reconstruction, SameTreeAtOneAndTwoThreadsWhenDetectionSearchesASubsample) {
+  const Scan scan = readScan(test::dataDir() / "housing_complex" / "scan_noisy.ply");
+  ReconstructOptions o;
+  o.detect.ransacPoints = 4000;  // of the scan's 10 000 points
+  EXPECT_EQ(treeAtThreads(scan.cloud, o, 1), treeAtThreads(scan.cloud, o, 2));
 }
 
 TEST(Reconstruction, ReportsEveryStageInOrder) {

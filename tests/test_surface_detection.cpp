@@ -722,6 +722,24 @@ TEST(SurfaceDetection, SameSeedSameResult) {
   EXPECT_EQ(ra.summary(), rb.summary());
 }
 
+TEST(SurfaceDetection, ASearchOnASubsampleAssignsEveryPoint) {
+  const Scan scan = readScan(dataDir() / "housing_complex" / "scan.ply");
+  DetectOptions o;
+  o.ransacPoints = 4000;  // of 10 000
+  const DetectionResult sub = detectSurfaces(scan.cloud, o);
+  const DetectionResult all = detectSurfaces(scan.cloud);
+  ASSERT_TRUE(sub.ok() && all.ok()) << sub.message << " / " << all.message;
+  EXPECT_NEAR(double(sub.searchedPoints), 4000.0, 200.0);
+  EXPECT_EQ(all.searchedPoints, scan.cloud.size());
+  ASSERT_EQ(sub.assignment.size(), scan.cloud.size());
+  std::size_t assigned = 0;
+  for (const Surface& s : sub.surfaces) assigned += s.inliers.size();
+  EXPECT_GE(double(assigned), 0.97 * double(scan.cloud.size()));
+  // The least support, scaled from the subsample to the whole scan.
+  EXPECT_GE(sub.minPoints, all.minPoints);
+  EXPECT_NEAR(double(sub.surfaces.size()), double(all.surfaces.size()), 3.0);
+}
+
 TEST(SurfaceDetection, MillimetresAndMetresGiveTheSameSurfaces) {
   const Scan scan = readScan(dataDir() / "rotated_block" / "scan_noisy.ply");
   PointCloud metres = scan.cloud;
