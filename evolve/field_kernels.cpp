@@ -323,77 +323,12 @@ std::vector<TermSums> smoothTerms(std::span<const Program> programs, const Point
 
 namespace {
 
-// ---- SARDF through the chunk kernel: only the points in the blend band ----
-
-// The gradient of entry i of an operand: its leaf's cached gradient (negated
-// for an odd id), or the one kept in the stack where it blended.
-struct Gradient {
-  float x, y, z;
-};
-
-Gradient operandGradient(const PointTables& t, std::int32_t id, const float* kept,
-                         std::size_t start, std::size_t i) {
-  if (id < 0) return {kept[i], kept[kChunk + i], kept[2 * kChunk + i]};
-  const std::size_t at = (std::size_t(id) >> 1) * t.n + start + i;
-  const float sign = (id & 1) ? -1.0f : 1.0f;
-  return {sign * t.gradX[at], sign * t.gradY[at], sign * t.gradZ[at]};
-}
-
-// The flagged points of a combination, as combineSmooth() computes them.
-void sardfBlend(const SardfChunk& k, const SardfBlendStep& s, std::size_t start, std::size_t m) {
-  const PointTables& t = *static_cast<const PointTables*>(k.context);
-  const SardfPartials ops{t.radius};
-  const bool leaf = s.vb == nullptr;
-  const float* src = t.values + std::size_t(s.leafCode >> 1) * t.n + start;
-  const float sign = (s.leafCode & 1) ? -1.0f : 1.0f;
-  for (std::size_t i = 0; i < m; ++i) {
-    if (s.flags[i] == 0) continue;
-    const double fa = s.va[i], fb = leaf ? sign * src[i] : s.vb[i];
-    const std::int32_t idb = leaf ? s.leafCode : s.ib[i];
-    const Partials r = s.intersect ? ops.intersect(fa, fb) : ops.unite(fa, fb);
-    s.va[i] = float(r.f);
-    if (r.d1 == 1.0 && r.d2 == 0.0) continue;  // a alone: keep its gradient and id
-    const Gradient gb = operandGradient(t, idb, s.gb, start, i);
-    if (r.d1 == 0.0 && r.d2 == 1.0) {
-      s.ia[i] = idb;
-    } else {
-      const Gradient ga = operandGradient(t, s.ia[i], s.ga, start, i);
-      s.ga[i] = float(r.d1 * ga.x + r.d2 * gb.x);
-      s.ga[kChunk + i] = float(r.d1 * ga.y + r.d2 * gb.y);
-      s.ga[2 * kChunk + i] = float(r.d1 * ga.z + r.d2 * gb.z);
-      s.ia[i] = -1;
-      continue;
-    }
-    if (idb < 0) {
-      s.ga[i] = gb.x;
-      s.ga[kChunk + i] = gb.y;
-      s.ga[2 * kChunk + i] = gb.z;
-    }
-  }
-}
-
-// The terms of the blended points, as smoothProgramTerms() computes them.
-void sardfBlendedTerms(const SardfChunk& k, const float* values, const std::int32_t* ids,
-                       const float* g, std::size_t start, std::size_t m, double* out) {
-  const PointTables& t = *static_cast<const PointTables*>(k.context);
-  for (std::size_t i = 0; i < m; ++i) {
-    if (ids[i] >= 0) continue;
-    const double r = values[i] / t.epsilon;
-    out[i] = std::exp(-r * r);
-    const double gx = g[i], gy = g[kChunk + i], gz = g[2 * kChunk + i];
-    const double gn = std::sqrt(gx * gx + gy * gy + gz * gz);
-    const std::size_t p = start + i;
-    const double c = gn > 0.0 ? -(gx * t.normX[p] + gy * t.normY[p] + gz * t.normZ[p]) / gn : 0.0;
-    const double theta = std::acos(std::clamp(c, -1.0, 1.0)) / t.alpha;
-    out[kChunk + i] = std::exp(-theta * theta);
-  }
-}
+// ---- SARDF: min/max's chunks, the arcs computed where the operands blend ----
 
 struct SardfScratch {
-  std::vector<float> values, gradients;
-  std::vector<std::int32_t> ids, flags;
+  std::vector<float> values, gradients, dense, terms;
+  std::vector<std::int32_t> ids, flags, denseIds;
   std::vector<std::uint8_t> blended;
-  std::vector<double> terms;
 };
 
 // R as a float no smaller than R: the kernel's band test may flag more
@@ -419,6 +354,8 @@ std::vector<TermSums> sardfTerms(std::span<const Program> programs, const PointT
   for (const Program& p : programs) depth = std::max(depth, p.stackDepth);
   std::vector<double> partial(2 * count * chunks, 0.0);  // [program][chunk][2]
   const SardfChunkKernel kernel = sardfKernel(simdLevel());
+  const float radius = float(t.radius), invEpsilon = float(1.0 / t.epsilon),
+              invAlpha = float(1.0 / t.alpha);
   const float band = bandOf(t.radius);
   eachChunkOfEachProgram(chunks, count, [&](std::size_t c, std::size_t j) {
     thread_local SardfScratch scratch;
@@ -428,25 +365,36 @@ std::vector<TermSums> sardfTerms(std::span<const Program> programs, const PointT
       scratch.gradients.resize(3 * depth * kChunk);
       scratch.blended.resize(depth);
       scratch.flags.resize(kChunk);
+      scratch.dense.resize(10 * kChunk);
+      scratch.denseIds.resize(3 * kChunk);
       scratch.terms.resize(2 * kChunk);
     }
     SardfChunk k;
     k.code = programs[j].code.data();
     k.codeSize = programs[j].code.size();
     k.values = t.values;
+    k.gradX = t.gradX;
+    k.gradY = t.gradY;
+    k.gradZ = t.gradZ;
+    k.normX = t.normX;
+    k.normY = t.normY;
+    k.normZ = t.normZ;
     k.distanceTerm = t.distanceTerm;
     k.normalTerm = t.normalTerm;
     k.n = t.n;
+    k.exactRadius = t.radius;
+    k.radius = radius;
     k.band = band;
+    k.invEpsilon = invEpsilon;
+    k.invAlpha = invAlpha;
     k.stackValues = scratch.values.data();
     k.stackIds = scratch.ids.data();
     k.stackGradients = scratch.gradients.data();
     k.stackBlended = scratch.blended.data();
     k.flags = scratch.flags.data();
+    k.dense = scratch.dense.data();
+    k.denseIds = scratch.denseIds.data();
     k.blendedTerms = scratch.terms.data();
-    k.blend = &sardfBlend;
-    k.terms = &sardfBlendedTerms;
-    k.context = &t;
     const std::size_t start = c * kChunk;
     kernel(k, start, std::min(kChunk, t.n - start), partial.data() + 2 * (j * chunks + c));
   });

@@ -75,11 +75,12 @@ std::vector<TermSums> smoothTerms(std::span<const Program> programs, const Point
 SardfChunkKernel sardfKernel(SimdLevel level);
 
 /// The point terms of each fused program (fused()) with SARDF of radius
-/// tables.radius, through the chunk kernel (evolve/sardf_chunk.h): every
-/// point's value, gradient and terms are smoothTerms()'s, only the order of
-/// the additions differs; read chunk by chunk for all the programs, and the
-/// same sums, bit for bit, alone or together and whatever the number of
-/// threads, as minMaxTerms().
+/// tables.radius, through the chunk kernel (evolve/sardf_chunk.h): min/max's
+/// chunks and lookups wherever SARDF is min/max, smoothTerms()'s values,
+/// gradients and terms in float where the operands blend. Like
+/// minMaxTerms(), every chunk is read once for all the programs, and each
+/// program's sums are the same, bit for bit, alone or together, on every
+/// instruction-set level and whatever the number of threads.
 std::vector<TermSums> sardfTerms(std::span<const Program> programs, const PointTables& tables);
 
 /// |T △ L| of each fused program: voxels where the program's solid (from the

@@ -3,23 +3,23 @@
 /// once per instruction-set level like the min/max kernel
 /// (evolve/minmax_chunk.h) and chosen at run time.
 ///
-/// SARDF equals min/max, value and gradient, wherever the two operands have
-/// opposite signs, differ by R or more, or one is at least twice the other
-/// (core/sardf.h): most points of most operations. The kernel runs a fused
-/// program like the min/max kernel (values and the id of the leaf whose
-/// ±field a point's value is), and flags, in the same vector loop, the points
-/// of each operation that may lie in the blend band (a superset: a test on
-/// floats with R rounded up). Only those go to the step `blend`, which
-/// computes core/sardf.h's value and derivatives in double and blends the
-/// operands' gradients (id −1: kept in the gradient stack). At the end the
-/// points with id ≥ 0 look their terms up as min/max does, and `terms`
-/// computes those of the blended ones. The value, gradient and terms of every
-/// point are those of the point-by-point SARDF field, bit for bit; the sums
-/// are the same on every level (same operations, fixed order).
+/// It runs a fused program like the min/max kernel, over the same chunks:
+/// every operation is first a vector loop that takes the min/max result
+/// (value and the id of the leaf whose ±field it is) where the operands lie
+/// outside SARDF's blend band — opposite signs, a difference of R or more,
+/// or one twice the other: there SARDF is min/max exactly — and flags the
+/// other points (a superset of those that blend, tested on floats with R
+/// rounded up). The flagged points are packed together and core/sardf.h's
+/// arcs, their derivatives and the blended gradients computed over them in
+/// one vector loop, in float (id −1; their gradients kept in the stack,
+/// the others are the leaves' cached ones). At the end the points with an id
+/// look their terms up as min/max does; those of the blended points are
+/// computed in float (exp and acos as polynomials), again packed. Values,
+/// gradients and terms agree with the point-by-point SARDF in double to float
+/// rounding; the sums are the same, bit for bit, on every level (the same
+/// float operations in the same order, sums in a fixed order).
 ///
-/// Plain data only, as for minmax_chunk.h: the level files call no library
-/// template or inline function; the two steps are passed in as pointers to
-/// functions compiled portably.
+/// Plain data only, as for minmax_chunk.h.
 
 #include <cstddef>
 #include <cstdint>
@@ -28,52 +28,30 @@
 
 namespace csgvox::fitness_detail {
 
-/// One combination the blend step finishes: a = op(a, b) at the flagged
-/// points of the chunk, where the vector loop left a as it was.
-struct SardfBlendStep {
-  float* va = nullptr;               ///< a's values
-  std::int32_t* ia = nullptr;        ///< a's ids (−1: blended)
-  float* ga = nullptr;               ///< a's gradients, [3][kChunk], at ids −1
-  const float* vb = nullptr;         ///< b's values (null: b is the leaf leafCode)
-  const std::int32_t* ib = nullptr;  ///< b's ids (null: b is the leaf leafCode)
-  const float* gb = nullptr;         ///< b's gradients (null: b is the leaf leafCode)
-  std::int32_t leafCode = 0;         ///< 2·leaf (+1: negated) when b is a leaf
-  bool intersect = false;            ///< Min (SARDF intersection), else Max (union)
-  const std::int32_t* flags = nullptr;  ///< nonzero at the points to finish
-};
-
-struct SardfChunk;
-
-/// Finishes `step` over the chunk [start, start + m).
-using SardfBlendFn = void (*)(const SardfChunk& k, const SardfBlendStep& step, std::size_t start,
-                              std::size_t m);
-
-/// Writes the distance and normal terms of the points of the chunk
-/// [start, start + m) whose id in `ids` is −1 into out[i] and out[kChunk + i]
-/// from their values and gradients (`gradients`: [3][kChunk]).
-using SardfTermsFn = void (*)(const SardfChunk& k, const float* values, const std::int32_t* ids,
-                              const float* gradients, std::size_t start, std::size_t m,
-                              double* out);
-
 /// One chunk's work: a fused program (fused()), the cached arrays and the
 /// scratch of stackDepth entries.
 struct SardfChunk {
   const Instr* code = nullptr;
   std::size_t codeSize = 0;
-  const float* values = nullptr;        ///< [p][n]
-  const float* distanceTerm = nullptr;  ///< [p][n]
-  const float* normalTerm = nullptr;    ///< [2p][n]
+  const float* values = nullptr;                                     ///< [p][n]
+  const float *gradX = nullptr, *gradY = nullptr, *gradZ = nullptr;  ///< [p][n]
+  const float *normX = nullptr, *normY = nullptr, *normZ = nullptr;  ///< [n] scan normals
+  const float* distanceTerm = nullptr;                               ///< [p][n]
+  const float* normalTerm = nullptr;                                 ///< [2p][n]
   std::size_t n = 0;
-  float band = 0.0f;  ///< R rounded up to a float: operands closer than this may blend
-  float* stackValues = nullptr;        ///< [depth][kChunk]
-  std::int32_t* stackIds = nullptr;    ///< [depth][kChunk]
-  float* stackGradients = nullptr;     ///< [depth][3][kChunk]
-  std::uint8_t* stackBlended = nullptr;  ///< [depth]: some id of the entry may be −1
-  std::int32_t* flags = nullptr;       ///< [kChunk]
-  double* blendedTerms = nullptr;      ///< [2][kChunk]
-  SardfBlendFn blend = nullptr;
-  SardfTermsFn terms = nullptr;
-  const void* context = nullptr;  ///< for blend and terms: the point tables
+  double exactRadius = 0.0;  ///< R, scan units: decides which of SARDF's cases applies
+  float radius = 0.0f;       ///< R as a float: the arcs
+  float band = 0.0f;         ///< R rounded up to a float: closer operands may blend
+  float invEpsilon = 0.0f;   ///< 1 / εd, per scan unit
+  float invAlpha = 0.0f;     ///< 1 / α, per radian
+  float* stackValues = nullptr;          ///< [depth][kChunk]
+  std::int32_t* stackIds = nullptr;      ///< [depth][kChunk]; −1 where blended
+  float* stackGradients = nullptr;       ///< [depth][3][kChunk], at the ids −1
+  std::uint8_t* stackBlended = nullptr;  ///< [depth]: some id of the entry is −1
+  std::int32_t* flags = nullptr;         ///< [kChunk]
+  float* dense = nullptr;                ///< [10][kChunk]: packed flagged points
+  std::int32_t* denseIds = nullptr;      ///< [3][kChunk]
+  float* blendedTerms = nullptr;         ///< [2][kChunk]
 };
 
 /// Adds the chunk [start, start + m) (m <= kChunk) of Σ exp(−di²) and
