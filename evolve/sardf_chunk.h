@@ -39,11 +39,11 @@ struct SardfChunk {
   const float* distanceTerm = nullptr;                               ///< [p][n]
   const float* normalTerm = nullptr;                                 ///< [2p][n]
   std::size_t n = 0;
-  double exactRadius = 0.0;  ///< R, scan units: decides which of SARDF's cases applies
-  float radius = 0.0f;       ///< R as a float: the arcs
-  float band = 0.0f;         ///< R rounded up to a float: closer operands may blend
-  float invEpsilon = 0.0f;   ///< 1 / εd, per scan unit
-  float invAlpha = 0.0f;     ///< 1 / α, per radian
+  double exactRadius = 0.0;              ///< R, scan units: decides which of SARDF's cases applies
+  float radius = 0.0f;                   ///< R as a float: the arcs
+  float band = 0.0f;                     ///< R rounded up to a float: closer operands may blend
+  float invEpsilon = 0.0f;               ///< 1 / εd, per scan unit
+  float invAlpha = 0.0f;                 ///< 1 / α, per radian
   float* stackValues = nullptr;          ///< [depth][kChunk]
   std::int32_t* stackIds = nullptr;      ///< [depth][kChunk]; −1 where blended
   float* stackGradients = nullptr;       ///< [depth][3][kChunk], at the ids −1

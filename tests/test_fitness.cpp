@@ -5,10 +5,10 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
-#include <random>
-#include <string>
 #include <numbers>
 #include <optional>
+#include <random>
+#include <string>
 
 #include "core/cpu_features.h"
 #include "evolve/field_kernels.h"
@@ -408,12 +408,12 @@ TEST(Fitness, SardfKernelMatchesPointByPointSardfAtTheBandEdges) {
   const auto up = [](float x) { return std::nextafter(x, 1e30f); };
   const auto down = [](float x) { return std::nextafter(x, -1e30f); };
   for (const float s : {1.0f, -1.0f}) {
-    for (const float x : {0.0f, 1e-30f, 1e-3f, 0.05f, 0.1f, 0.2f, 0.25f, 0.3f, 0.5f, 0.75f, 1.0f,
-                          3.0f, 1e3f}) {
+    for (const float x :
+         {0.0f, 1e-30f, 1e-3f, 0.05f, 0.1f, 0.2f, 0.25f, 0.3f, 0.5f, 0.75f, 1.0f, 3.0f, 1e3f}) {
       const float a = s * x;
-      for (const float b : {a, s * (x + r), up(s * (x + r)), down(s * (x + r)), 2.0f * a,
-                            up(2.0f * a), down(2.0f * a), -a, 0.0f, -0.0f, s * (x + 0.5f * r),
-                            0.5f * a, s * (x + 2.0f * r)}) {
+      for (const float b :
+           {a, s * (x + r), up(s * (x + r)), down(s * (x + r)), 2.0f * a, up(2.0f * a),
+            down(2.0f * a), -a, 0.0f, -0.0f, s * (x + 0.5f * r), 0.5f * a, s * (x + 2.0f * r)}) {
         pairs.emplace_back(a, b);
         pairs.emplace_back(b, a);
       }
@@ -454,9 +454,9 @@ TEST(Fitness, SardfKernelMatchesPointByPointSardfOnRandomValues) {
 // reference on the same model's arrays, and against the tree's own field.
 TEST(Fitness, SardfKernelMatchesPointByPointSardfOnTrees) {
   const test::OrientedPoints in = noisyCube(61);
-  const PrimitiveLibrary library = test::cubePlanes(
-      {Sphere{Vec3(0.5, 0.5, 0.5), 0.8}, Cylinder{Vec3::Zero(), Vec3::UnitY(), 0.5, 3},
-       HalfSpace{Vec3(1, 1, 0).normalized(), 0.9}});
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(0.5, 0.5, 0.5), 0.8},
+                                                     Cylinder{Vec3::Zero(), Vec3::UnitY(), 0.5, 3},
+                                                     HalfSpace{Vec3(1, 1, 0).normalized(), 0.9}});
   FitnessOptions options;
   options.operations = SetOperationKind::Sardf;
   const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
