@@ -64,8 +64,8 @@ void addJobOptions(CLI::App& app, JobOptions& job) {
   addNamedOption<SetOperationKind>(
       app, "--repair-operations,--refine-operations", hy.fitness.operations, kSetOperationNames,
       "hybrid: field of the set operations in the regions' fitness: minmax (the "
-      "default), sardf (smooth: differs from minmax only at points off the surface, "
-      "about 7 times slower) or rfunction");
+      "default), sardf (smooth: differs from minmax only near edges and off the surface; "
+      "its generations about 10 times slower) or rfunction");
   app.add_option("--bad-angle", hy.badAngle,
                  "hybrid: a point whose normal is further than this from the tree's, in degrees, "
                  "is badly explained (so is one farther than 1% of the diagonal)")

@@ -1,7 +1,7 @@
 // Speed of the genetic stage: fitness evaluations per second (points × tree
-// nodes per second) with min/max and smooth set operations on 10k and 100k
+// nodes per second) with min/max, SARDF and R-functions on 10k and 100k
 // points, and the time of one generation at population 150 on a 20k-point
-// scan of a box.
+// scan of a box with each of them.
 //
 //   bench_evolve [--quick]
 
@@ -111,20 +111,25 @@ void fitnessRate(std::size_t n, std::size_t primitives, SetOperationKind ops, co
   if (sink == 0.123) std::printf(" ");
 }
 
-void generationTime(std::size_t n, int threads, bool quick) {
+void generationTime(std::size_t n, std::size_t primitives, SetOperationKind ops, const char* name,
+                    int threads, bool quick) {
   std::vector<Vec3> points, normals;
   boxScan(n, points, normals);
-  const PrimitiveLibrary library = boxLibrary();
-  const FitnessModel model(points, normals, 2.0 * std::sqrt(3.0), library);
+  const PrimitiveLibrary library = boxLibrary(primitives);
+  FitnessOptions fo;
+  fo.operations = ops;
+  const FitnessModel model(points, normals, 2.0 * std::sqrt(3.0), library, fo);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   EvolveOptions eo;
-  eo.maxGenerations = quick ? 20 : 200;
+  // R-functions take tens of times longer: fewer generations of them.
+  eo.maxGenerations = quick ? 20 : (ops == SetOperationKind::RFunction ? 40 : 200);
   eo.stallGenerations = 0;
   const Clock::time_point wall = Clock::now();
   const std::clock_t cpu = std::clock();
   const EvolveResult r = evolve(model, {}, eo);
   const double w = seconds(wall), c = double(std::clock() - cpu) / CLOCKS_PER_SEC;
-  std::printf("| %zu | %d | %zu | %.2f | %.2f | %.0f | %zu |\n", n, threads, r.generations,
+  std::printf("| %s | %zu | %zu | %d | %zu | %.2f | %.2f | %.0f | %zu |\n", name, n, primitives,
+              threads, r.generations,
               1e3 * w / double(r.generations), 1e3 * c / double(r.generations),
               double(r.evaluations) / double(r.generations), r.best.nodeCount());
 }
@@ -143,13 +148,27 @@ int main(int argc, char** argv) {
   for (const std::size_t n : {std::size_t(10000), std::size_t(100000)}) {
     fitnessRate(n, 10, SetOperationKind::MinMax, "min/max", quick);
     fitnessRate(n, 50, SetOperationKind::MinMax, "min/max", quick);
+    fitnessRate(n, 10, SetOperationKind::Sardf, "SARDF", quick);
+    fitnessRate(n, 50, SetOperationKind::Sardf, "SARDF", quick);
     fitnessRate(n, 10, SetOperationKind::RFunction, "R-function", quick);
   }
   std::printf("\nOne generation, population 150 (includes variation, caching, ranking)\n\n");
   std::printf(
-      "| points | threads | generations | wall ms per generation | CPU ms per generation | "
-      "trees evaluated per generation | best tree nodes |\n");
-  std::printf("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
-  for (const int threads : {1, 2}) generationTime(20000, threads, quick);
+      "| operations | points | primitives | threads | generations | wall ms per generation | CPU ms "
+      "per generation | trees evaluated per generation | best tree nodes |\n");
+  std::printf("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  const struct {
+    SetOperationKind ops;
+    const char* name;
+  } kinds[] = {{SetOperationKind::MinMax, "min/max"},
+               {SetOperationKind::Sardf, "SARDF"},
+               {SetOperationKind::RFunction, "R-function"}};
+  for (const std::size_t primitives : {std::size_t(10), std::size_t(50)}) {
+    for (const auto& kind : kinds) {
+      for (const int threads : {1, 2}) {
+        generationTime(20000, primitives, kind.ops, kind.name, threads, quick);
+      }
+    }
+  }
   return 0;
 }

@@ -8,7 +8,8 @@
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
 //        [--models 011,039,...] [--samples S] [--time-limit T] [--no-finer-grid]
 //        [--no-unsupported-regions] [--finish] [--repair-searches K]
-//        [--repair-stall S] [--seed S] [--keep OUTDIR]
+//        [--repair-stall S] [--repair-operations minmax|sardf|rfunction]
+//        [--seed S] [--keep OUTDIR]
 //        [--scanner [--setups 1|2] [--depth-noise F] [--outliers F]
 //         [--mixed-pixels P] [--scanner-normals none|scanner]
 //         [--registration-shift F] [--registration-turn R]
@@ -40,6 +41,8 @@
 //   --repair-searches K, --repair-stall S  the hybrid's repair searches of
 //                 each region and their stall rule (as `csgvox --repair-searches`,
 //                 `--repair-stall`; the old --refine-* names are accepted too)
+//   --repair-operations  the set operations of the repair searches' fitness
+//                 (as `csgvox --repair-operations`; default: the hybrid's)
 //   --seed        ReconstructOptions::seed (default 1; as `csgvox --seed`): the
 //                 scans stay the same, only the reconstruction's random
 //                 choices change, to tell a change's effect from luck
@@ -83,6 +86,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/named_values.h"
+#include "core/set_operations.h"
 #include "core/statistics.h"
 #include "io/point_arrays.h"
 #include "io/mesh_files.h"
@@ -107,6 +112,7 @@ struct Options {
   bool unsupportedRegions = true;
   std::size_t repairSearches = 0;  // 0: the default
   std::size_t repairStall = 0;     // 0: the default
+  std::optional<SetOperationKind> repairOperations;  // none: the default
   bool finish = false;
   std::uint64_t seed = 1;
   int iouSamples = 200000;
@@ -276,6 +282,7 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     ro.hybrid.unsupportedRegions = opt.unsupportedRegions;
     if (opt.repairSearches > 0) ro.hybrid.searches = opt.repairSearches;
     if (opt.repairStall > 0) ro.hybrid.evolve.stallGenerations = opt.repairStall;
+    if (opt.repairOperations) ro.hybrid.fitness.operations = *opt.repairOperations;
     ro.finish.enabled = opt.finish;
     ro.seed = opt.seed;
     ro.method = opt.method;
@@ -454,7 +461,8 @@ int usage(const char* argv0) {
                "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-finer-grid] "
                "[--no-unsupported-regions] [--finish] [--repair-searches K] "
-               "[--repair-stall S] [--seed S] [--keep OUTDIR] [--scanner [--setups 1|2] "
+               "[--repair-stall S] [--repair-operations minmax|sardf|rfunction] [--seed S] "
+               "[--keep OUTDIR] [--scanner [--setups 1|2] "
                "[--depth-noise F] [--outliers F] [--mixed-pixels P] "
                "[--scanner-normals none|scanner] [--registration-shift F] [--registration-turn R] "
                "[--density-variation F] [--scanner-only]]\n",
@@ -483,6 +491,14 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       opt.repairSearches = std::size_t(std::max(1, std::atoi(argv[++i])));
     } else if ((arg == "--repair-stall" || arg == "--refine-stall") && hasValue) {
       opt.repairStall = std::size_t(std::max(1, std::atoi(argv[++i])));
+    } else if (arg == "--repair-operations" && hasValue) {
+      try {
+        opt.repairOperations = valueNamed<SetOperationKind>(kSetOperationNames, argv[++i],
+                                                            "--repair-operations");
+      } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return false;
+      }
     } else if (arg == "--seed" && hasValue) {
       opt.seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--models" && hasValue) {
@@ -562,6 +578,10 @@ void printHeading(const Options& opt) {
   if (opt.repairSearches > 0 || opt.repairStall > 0)
     std::printf("hybrid searches per region: %zu, stall: %zu generations (0: the default)\n",
                 opt.repairSearches, opt.repairStall);
+  if (opt.repairOperations)
+    std::printf("hybrid repair operations: %s\n",
+                std::string(nameOf<SetOperationKind>(kSetOperationNames, *opt.repairOperations))
+                    .c_str());
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/cpu_features.h"
@@ -317,6 +318,94 @@ std::vector<TermSums> smoothTerms(std::span<const Program> programs, const Point
                  ? smoothProgramTerms(programs[j], tables, RFunctionPartials{})
                  : smoothProgramTerms(programs[j], tables, SardfPartials{tables.radius});
   });
+  return out;
+}
+
+namespace {
+
+// ---- SARDF: min/max's chunks, the arcs computed where the operands blend ----
+
+struct SardfScratch {
+  std::vector<float> values, gradients, dense, terms;
+  std::vector<std::int32_t> ids, flags, denseIds;
+  std::vector<std::uint8_t> blended;
+};
+
+// R as a float no smaller than R: the kernel's band test may flag more
+// points than blend, never fewer.
+float bandOf(double radius) {
+  float band = float(radius);
+  if (double(band) < radius) band = std::nextafter(band, std::numeric_limits<float>::infinity());
+  return band;
+}
+
+}  // namespace
+
+SardfChunkKernel sardfKernel(SimdLevel level) {
+  static const auto table =
+      kernelsByLevel(portableSardfChunk(), avx2SardfChunk, avx512SardfChunk);
+  return table[std::size_t(std::clamp(int(level), 0, int(table.size()) - 1))];
+}
+
+std::vector<TermSums> sardfTerms(std::span<const Program> programs, const PointTables& t) {
+  const std::size_t count = programs.size();
+  const std::size_t chunks = (t.n + kChunk - 1) / kChunk;
+  std::size_t depth = 1;
+  for (const Program& p : programs) depth = std::max(depth, p.stackDepth);
+  std::vector<double> partial(2 * count * chunks, 0.0);  // [program][chunk][2]
+  const SardfChunkKernel kernel = sardfKernel(simdLevel());
+  const float radius = float(t.radius), invEpsilon = float(1.0 / t.epsilon),
+              invAlpha = float(1.0 / t.alpha);
+  const float band = bandOf(t.radius);
+  eachChunkOfEachProgram(chunks, count, [&](std::size_t c, std::size_t j) {
+    thread_local SardfScratch scratch;
+    if (scratch.values.size() < depth * kChunk) {
+      scratch.values.resize(depth * kChunk);
+      scratch.ids.resize(depth * kChunk);
+      scratch.gradients.resize(3 * depth * kChunk);
+      scratch.blended.resize(depth);
+      scratch.flags.resize(kChunk);
+      scratch.dense.resize(10 * kChunk);
+      scratch.denseIds.resize(3 * kChunk);
+      scratch.terms.resize(2 * kChunk);
+    }
+    SardfChunk k;
+    k.code = programs[j].code.data();
+    k.codeSize = programs[j].code.size();
+    k.values = t.values;
+    k.gradX = t.gradX;
+    k.gradY = t.gradY;
+    k.gradZ = t.gradZ;
+    k.normX = t.normX;
+    k.normY = t.normY;
+    k.normZ = t.normZ;
+    k.distanceTerm = t.distanceTerm;
+    k.normalTerm = t.normalTerm;
+    k.n = t.n;
+    k.exactRadius = t.radius;
+    k.radius = radius;
+    k.band = band;
+    k.invEpsilon = invEpsilon;
+    k.invAlpha = invAlpha;
+    k.stackValues = scratch.values.data();
+    k.stackIds = scratch.ids.data();
+    k.stackGradients = scratch.gradients.data();
+    k.stackBlended = scratch.blended.data();
+    k.flags = scratch.flags.data();
+    k.dense = scratch.dense.data();
+    k.denseIds = scratch.denseIds.data();
+    k.blendedTerms = scratch.terms.data();
+    const std::size_t start = c * kChunk;
+    kernel(k, start, std::min(kChunk, t.n - start), partial.data() + 2 * (j * chunks + c));
+  });
+  std::vector<TermSums> out(count);
+  for (std::size_t j = 0; j < count; ++j) {
+    const double* s = partial.data() + 2 * j * chunks;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      out[j].distance += s[2 * c];
+      out[j].normal += s[2 * c + 1];
+    }
+  }
   return out;
 }
 

@@ -14,6 +14,7 @@
 #include "core/set_operations.h"
 #include "evolve/minmax_chunk.h"
 #include "evolve/primitive_library.h"
+#include "evolve/sardf_chunk.h"
 
 namespace csgvox::fitness_detail {
 
@@ -62,10 +63,25 @@ MinMaxChunkKernel minMaxKernel(SimdLevel level);
 /// of threads.
 std::vector<TermSums> minMaxTerms(std::span<const Program> programs, const PointTables& tables);
 
-/// The point terms of each (unfused) program with R-functions or SARDF.
+/// The point terms of each (unfused) program with R-functions or SARDF,
+/// every operation blended point by point (the fitness runs sardfTerms()
+/// for SARDF; this is its reference).
 /// @throw std::invalid_argument for min/max.
 std::vector<TermSums> smoothTerms(std::span<const Program> programs, const PointTables& tables,
                                   SetOperationKind ops);
+
+/// The SARDF chunk kernel of `level`, or of the highest level below it that
+/// the CPU and the build have.
+SardfChunkKernel sardfKernel(SimdLevel level);
+
+/// The point terms of each fused program (fused()) with SARDF of radius
+/// tables.radius, through the chunk kernel (evolve/sardf_chunk.h): min/max's
+/// chunks and lookups wherever SARDF is min/max, smoothTerms()'s values,
+/// gradients and terms in float where the operands blend. Like
+/// minMaxTerms(), every chunk is read once for all the programs, and each
+/// program's sums are the same, bit for bit, alone or together, on every
+/// instruction-set level and whatever the number of threads.
+std::vector<TermSums> sardfTerms(std::span<const Program> programs, const PointTables& tables);
 
 /// |T △ L| of each fused program: voxels where the program's solid (from the
 /// primitives' inside sets, [p][words]) and the labels (`labelCount` of them

@@ -191,17 +191,18 @@ std::vector<Fitness> FitnessModel::evaluate(std::span<const CsgTree* const> tree
                                            d.epsilon,
                                            d.alpha,
                                            d.radius};
-  // Min/max and the voxel term run the fused programs, the smooth
-  // operations the plain ones.
-  const bool minMax = d.options.operations == SetOperationKind::MinMax;
+  // Min/max, SARDF and the voxel term run the fused programs, R-functions
+  // the plain ones.
+  const SetOperationKind ops = d.options.operations;
   std::vector<Program> fused;
-  if (minMax || d.voxels) {
+  if (ops != SetOperationKind::RFunction || d.voxels) {
     fused.reserve(programs.size());
     for (const Program& p : programs) fused.push_back(fitness_detail::fused(p));
   }
   const std::vector<fitness_detail::TermSums> sums =
-      minMax ? fitness_detail::minMaxTerms(fused, tables)
-             : fitness_detail::smoothTerms(programs, tables, d.options.operations);
+      ops == SetOperationKind::MinMax  ? fitness_detail::minMaxTerms(fused, tables)
+      : ops == SetOperationKind::Sardf ? fitness_detail::sardfTerms(fused, tables)
+                                       : fitness_detail::smoothTerms(programs, tables, ops);
   std::vector<std::size_t> mismatch;
   if (d.voxels) {
     const Data::Voxels& v = *d.voxels;

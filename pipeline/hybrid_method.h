@@ -15,9 +15,10 @@
 /// the voxel stage dropped — and, where the boundary is unsupported, also seeded with the repairs
 /// the voxel labels ask for there (a candidate c, c − q or c ∩ q, q one of the subtree's
 /// primitives, taken away or added), with Eq. 7 on the points around it plus the voxel term there
-/// (min/max field by default: on clean scans SARDF gives the same fitness at several times the
-/// cost). Regions are independent, so they run in parallel. A refined subtree replaces the original
-/// only when the whole tree's fitness on all points improves (by more than minGain·N, so noise
+/// (min/max field by default: SARDF gave the same trees on the bundled scans, its generations
+/// about 10 times min/max's, docs/benchmarks.md). Regions are independent, so they run in
+/// parallel. A refined subtree replaces the original only when the whole tree's fitness on all
+/// points improves (by more than minGain·N, so noise
 /// alone does not swap primitives) once the points it explains only by a zero set that bounds no
 /// volume are no longer credited (the min/max field of (A − X) ∪ (A ∩ X) is zero on X's surface
 /// inside A), and of the points the boundary it adds where the scan has no points would hold at the
