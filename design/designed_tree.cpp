@@ -509,6 +509,7 @@ class Designer {
     grid_ = iouGrid(local_, options_.iouResolution);
     if (!localPoints_.empty()) baseDistance_ = meanDistance(local_, &baseAbs_);
     basePrims_.clear();
+    baseLeafInside_.assign(d_.leaves.size(), {});
     for (std::size_t i = 0; i < d_.leaves.size(); ++i)
       basePrims_.push_back(d_.localPrimitive(int(i)));
     const CsgTree base = d_.localTree();
@@ -553,13 +554,13 @@ class Designer {
       affected.insert(l.begin(), l.end());
     }
     Aabb region;
-    std::vector<std::pair<const Primitive*, Primitive>> moved;
+    std::vector<std::pair<int, Primitive>> moved;
     for (int i : affected) {
       Primitive now = d_.localPrimitive(i);
       if (!validPrimitive(now)) return -1.0;
       region.extend(now.bounds());
       region.extend(basePrims_[std::size_t(i)].bounds());
-      moved.emplace_back(&basePrims_[std::size_t(i)], std::move(now));
+      moved.emplace_back(i, std::move(now));
     }
     if (affected.empty()) {
       return baseUnion_ > 0 ? double(baseInter_) / double(baseUnion_) : 1.0;
@@ -574,12 +575,12 @@ class Designer {
       }
     }
     std::vector<char> flips(pts.size(), 0);
-    std::vector<double> before(pts.size()), after(pts.size());
-    for (const auto& [base, now] : moved) {
-      base->values(pts, before);
+    std::vector<double> after(pts.size());
+    for (const auto& [leaf, now] : moved) {
+      const std::vector<char>& before = baseInsideOf(leaf);
       now.values(pts, after);
       for (std::size_t k = 0; k < pts.size(); ++k) {
-        flips[k] = flips[k] || ((before[k] >= 0.0) != (after[k] >= 0.0));
+        flips[k] = flips[k] || (before[idx[k]] != (after[k] >= 0.0));
       }
     }
     std::vector<Vec3> flipped;
@@ -613,8 +614,8 @@ class Designer {
       // min and max move by at most what an operand moves: when the moved
       // leaves' largest change already fits, the tree's does.
       std::vector<double> bound(close.size(), 0.0), v0(close.size()), v1(close.size());
-      for (const auto& [base, now] : moved) {
-        base->values(close, v0);
+      for (const auto& [leaf, now] : moved) {
+        basePrims_[std::size_t(leaf)].values(close, v0);
         now.values(close, v1);
         for (std::size_t k = 0; k < close.size(); ++k) {
           bound[k] = std::max(bound[k], std::abs(v1[k] - v0[k]));
@@ -632,6 +633,19 @@ class Designer {
       }
     }
     return iou;
+  }
+
+  // Which grid points lie inside baseline leaf `leaf`, computed on first use
+  // (each check moves a few leaves; most leaves are never moved).
+  const std::vector<char>& baseInsideOf(int leaf) const {
+    std::vector<char>& inside = baseLeafInside_[std::size_t(leaf)];
+    if (inside.empty()) {
+      std::vector<double> f(grid_.points.size());
+      basePrims_[std::size_t(leaf)].values(grid_.points, f);
+      inside.resize(f.size());
+      for (std::size_t i = 0; i < f.size(); ++i) inside[i] = f[i] >= 0.0;
+    }
+    return inside;
   }
 
   void snap() {
@@ -810,6 +824,7 @@ class Designer {
   std::vector<double> baseAbs_;  // each point's |f| to the fitted tree
   // The baseline: the designed tree before any snap.
   std::vector<Primitive> basePrims_;     // its leaves
+  mutable std::vector<std::vector<char>> baseLeafInside_;  // see baseInsideOf()
   std::vector<char> baseInside_;         // its inside flags on the grid
   long baseInter_ = 0, baseUnion_ = 0;   // its grid cells in and in either with the fitted tree
   std::vector<double> baseDesignedAbs_;  // each point's |f| to it
