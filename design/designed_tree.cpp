@@ -666,27 +666,42 @@ class Designer {
             on ? *candidate[std::size_t(i)] : d_.parameters[std::size_t(i)].fitted;
       }
     };
-    // All together first: when the set costs no more than one parameter may,
-    // it is kept. Else each parameter on its own: the solid it changes (IoU
-    // against the fitted tree, from the baseline's) and the points' fit;
-    // then the ones that pass, together, for the points' fit, dropping the
-    // costliest until it passes.
+    // A value no point holds may not change the solid at all: nothing says
+    // the snapped one is right (a hidden face, a cutter's turn); each is
+    // tried alone. The values the points hold: all together first, kept
+    // when the set costs no more than one parameter may; else each on its
+    // own (the solid it changes: IoU against the fitted tree, from the
+    // baseline's). Then the ones that pass, together, for the points' fit,
+    // dropping the costliest until it passes.
     const double baseIou = baseUnion_ > 0 ? double(baseInter_) / double(baseUnion_) : 1.0;
-    const auto passes = [&](double iou) {
-      return iou >= 0.0 && baseIou - iou <= 1.0 - options_.minIou;
+    const auto passes = [&](double iou, double allowed) {
+      return iou >= 0.0 && baseIou - iou <= allowed;
     };
-    apply(all, true);
-    if (passes(check(all))) {
-      for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
-      return;
-    }
-    apply(all, false);
+    const double allowed = 1.0 - options_.minIou;
+    std::vector<int> held;
     std::vector<std::pair<double, int>> passing;
     for (int i : all) {
+      if (std::isfinite(d_.parameters[std::size_t(i)].uncertainty)) {
+        held.push_back(i);
+        continue;
+      }
       apply({i}, true);
       const double iou = check({i});
       apply({i}, false);
-      if (passes(iou)) passing.emplace_back(iou, i);
+      if (passes(iou, 0.0)) passing.emplace_back(iou, i);
+    }
+    apply(held, true);
+    const bool together = passes(check(held), allowed);
+    apply(held, false);
+    for (int i : held) {
+      if (together) {
+        passing.emplace_back(1.0, i);
+        continue;
+      }
+      apply({i}, true);
+      const double iou = check({i});
+      apply({i}, false);
+      if (passes(iou, allowed)) passing.emplace_back(iou, i);
     }
     std::stable_sort(passing.begin(), passing.end(),
                      [](const auto& a, const auto& b) { return a.first > b.first; });
