@@ -9,9 +9,11 @@
 ///   uncertainty  u = k·σ/√n: σ the scan's noise about the tree, n the
 ///                points on the faces the value places (infinite when no
 ///                point holds it, the tree's own tolerance without points);
-///   kept         all together when that costs the tree at most 1 − minIou
-///                of voxel IoU; else per parameter (a group of values the
-///                fit shares): when snapping it alone costs at most that
+///   kept         a value no point holds: when it changes no IoU grid
+///                point's side; the values the points hold: all together
+///                when that costs the tree at most 1 − minIou of voxel IoU;
+///                else per parameter (a group of values the fit shares):
+///                when snapping it alone costs at most that
 ///                (against the fitted tree; stratified points, one per
 ///                cell) — then for the ones kept, together, while the
 ///                points' mean distance to the tree grows by at most
