@@ -678,7 +678,7 @@ class Designer {
       return iou >= 0.0 && baseIou - iou <= allowed;
     };
     const double allowed = 1.0 - options_.minIou;
-    std::vector<int> held;
+    std::vector<int> held, unheld;
     std::vector<std::pair<double, int>> passing;
     for (int i : all) {
       if (std::isfinite(d_.parameters[std::size_t(i)].uncertainty)) {
@@ -688,8 +688,16 @@ class Designer {
       apply({i}, true);
       const double iou = check({i});
       apply({i}, false);
-      if (passes(iou, 0.0)) passing.emplace_back(iou, i);
+      if (passes(iou, 0.0)) unheld.push_back(i);
     }
+    // Together too (a face one cutter hides may be the one another moved).
+    apply(unheld, true);
+    while (!unheld.empty() && !passes(check(unheld), 0.0)) {
+      apply({unheld.back()}, false);
+      unheld.pop_back();
+    }
+    apply(unheld, false);
+    for (int i : unheld) passing.emplace_back(baseIou, i);
     apply(held, true);
     const bool together = passes(check(held), allowed);
     apply(held, false);
