@@ -890,13 +890,8 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
   const auto refined = [&](DesignedTree first, PartFrame f) {
     const double d0 = exportExtent(fitted).diagonal();
     if (points.empty() || first.datumOffset.norm() <= 1e-9 * d0) return first;
-    f.origin += f.rotation * first.datumOffset;
-    const double originTol = options.frame.originTolerance * d0;
-    for (int i = 0; i < 3; ++i) {
-      if (const auto v = simplestLength(f.origin[i], originTol, UnitSystem::Millimetre)) {
-        f.origin[i] = *v;
-      }
-    }
+    f.origin = roundedOrigin(f.origin + f.rotation * first.datumOffset,
+                             options.frame.originTolerance * d0);
     return designTree(fitted, f, points, options);
   };
   if (!frame.spinFree) return refined(std::move(d), frame);

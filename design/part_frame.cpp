@@ -254,14 +254,18 @@ PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points,
       origin.y() = axisAndCenter.second.y();
     }
   }
-  frame.origin = frame.rotation * origin;
-  const double originTol = options.originTolerance * localExtent.diagonal();
+  frame.origin =
+      roundedOrigin(frame.rotation * origin, options.originTolerance * localExtent.diagonal());
+  return frame;
+}
+
+Vec3 roundedOrigin(Vec3 origin, double tolerance) {
   for (int i = 0; i < 3; ++i) {
-    if (const auto v = simplestLength(frame.origin[i], originTol, UnitSystem::Millimetre)) {
-      frame.origin[i] = *v;
+    if (const auto v = simplestLength(origin[i], tolerance, UnitSystem::Millimetre)) {
+      origin[i] = *v;
     }
   }
-  return frame;
+  return origin;
 }
 
 Primitive transformedPrimitive(const Primitive& primitive, const Mat3& rotation,

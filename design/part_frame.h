@@ -49,6 +49,10 @@ struct FrameOptions {
 PartFrame partFrame(const CsgTree& tree, std::span<const Vec3> points = {},
                     const FrameOptions& options = {});
 
+/// `origin` with each coordinate within `tolerance` (scan units) of a whole
+/// unit, half, tenth or hundredth set to it.
+Vec3 roundedOrigin(Vec3 origin, double tolerance);
+
 /// The signed permutation of the world axes nearest `rotation` (a
 /// right-handed one) when each of its columns lies within `tolerance`
 /// radians of a world axis; else `rotation` itself.

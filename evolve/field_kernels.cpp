@@ -17,6 +17,22 @@
 namespace csgvox::fitness_detail {
 namespace {
 
+// Each program's sums over its chunks' partial (distance, normal) pairs, in
+// chunk order (the same sums whatever the number of threads).
+std::vector<TermSums> sumChunkPartials(const std::vector<double>& partial, std::size_t count,
+                                       std::size_t chunks) {
+  std::vector<TermSums> out(count);
+  for (std::size_t j = 0; j < count; ++j) {
+    const double* s = partial.data() + 2 * j * chunks;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      out[j].distance += s[2 * c];
+      out[j].normal += s[2 * c + 1];
+    }
+  }
+  return out;
+}
+
+
 // The last instruction's value negated: a leaf flips its sign, anything
 // else gets a Negate.
 void negateLast(std::vector<Instr>& code) {
@@ -125,15 +141,7 @@ std::vector<TermSums> minMaxTerms(std::span<const Program> programs, const Point
     const std::size_t start = c * kChunk;
     kernel(k, start, std::min(kChunk, t.n - start), partial.data() + 2 * (j * chunks + c));
   });
-  std::vector<TermSums> out(count);
-  for (std::size_t j = 0; j < count; ++j) {
-    const double* s = partial.data() + 2 * j * chunks;
-    for (std::size_t c = 0; c < chunks; ++c) {
-      out[j].distance += s[2 * c];
-      out[j].normal += s[2 * c + 1];
-    }
-  }
-  return out;
+  return sumChunkPartials(partial, count, chunks);
 }
 
 namespace {
@@ -398,15 +406,7 @@ std::vector<TermSums> sardfTerms(std::span<const Program> programs, const PointT
     const std::size_t start = c * kChunk;
     kernel(k, start, std::min(kChunk, t.n - start), partial.data() + 2 * (j * chunks + c));
   });
-  std::vector<TermSums> out(count);
-  for (std::size_t j = 0; j < count; ++j) {
-    const double* s = partial.data() + 2 * j * chunks;
-    for (std::size_t c = 0; c < chunks; ++c) {
-      out[j].distance += s[2 * c];
-      out[j].normal += s[2 * c + 1];
-    }
-  }
-  return out;
+  return sumChunkPartials(partial, count, chunks);
 }
 
 namespace {
