@@ -9,6 +9,7 @@
 #include <BRepGProp.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepBuilderAPI_Copy.hxx>
 #include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
@@ -27,6 +28,10 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <algorithm>
+#include <chrono>
+#include <future>
+#include <memory>
+#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -314,6 +319,10 @@ BrepSummary summarize(const TopoDS_Shape& shape) {
 
 namespace {
 
+// The longest wait for OpenCASCADE to merge a built solid's faces (it takes
+// under 0.05 s on every bundled part).
+constexpr double kUnifySeconds = 5.0;
+
 // A built solid: one solid, or a compound of several.
 struct Candidate {
   TopoDS_Shape shape;
@@ -343,17 +352,34 @@ Candidate candidate(const TopoDS_Shape& shape) {
 }
 
 // The candidate with the faces of one surface merged, when OpenCASCADE
-// can do it and the result is as valid (merging is cosmetic). Only ever
-// given the chosen solid: on the wrong solids a boolean can leave, merging
-// ran for more than ten minutes on one (part 143 of the InverseCSG parts).
+// can do it within kUnifySeconds and the result is as valid (merging is
+// cosmetic). Only ever given the chosen solid: on the wrong solids a boolean
+// can leave, merging ran for more than ten minutes on one (part 143 of the
+// InverseCSG parts), and on a right solid of 99 faces (a tree of part 155)
+// it never ended. It runs on a copy of the shape in a thread of its own; past
+// the limit the faces stay as built and the thread is left to end with the
+// process (OpenCASCADE's merging cannot be interrupted).
 Candidate unified(const Candidate& c) {
-  try {
-    ShapeUpgrade_UnifySameDomain unify(c.shape, true, true, false);
-    unify.Build();
-    Candidate merged = candidate(unify.Shape());
-    if (merged.valid && merged.solids == c.solids) return merged;
-  } catch (const Standard_Failure&) {
+  using Result = std::optional<TopoDS_Shape>;
+  auto task = std::make_shared<std::packaged_task<Result(TopoDS_Shape)>>([](TopoDS_Shape shape) {
+    try {
+      ShapeUpgrade_UnifySameDomain unify(shape, true, true, false);
+      unify.Build();
+      return Result(unify.Shape());
+    } catch (const Standard_Failure&) {
+      return Result();
+    }
+  });
+  std::future<Result> merging = task->get_future();
+  BRepBuilderAPI_Copy copy(c.shape);
+  std::thread([task, shape = copy.Shape()]() { (*task)(shape); }).detach();
+  if (merging.wait_for(std::chrono::duration<double>(kUnifySeconds)) != std::future_status::ready) {
+    return c;
   }
+  const Result shape = merging.get();
+  if (!shape) return c;
+  Candidate merged = candidate(*shape);
+  if (merged.valid && merged.solids == c.solids) return merged;
   return c;
 }
 
