@@ -9,7 +9,7 @@
 //        [--models 011,039,...] [--samples S] [--time-limit T] [--no-finer-grid]
 //        [--no-unsupported-regions] [--finish] [--repair-searches K]
 //        [--repair-stall S] [--repair-operations minmax|sardf|rfunction]
-//        [--seed S] [--keep OUTDIR]
+//        [--seed S] [--keep OUTDIR] [--estimate-normals]
 //        [--scanner [--setups 1|2] [--depth-noise F] [--outliers F]
 //         [--mixed-pixels P] [--scanner-normals none|scanner]
 //         [--registration-shift F] [--registration-turn R]
@@ -17,6 +17,9 @@
 //   --points      points sampled from each mesh, by area (default 50000)
 //   --noise       Gaussian position noise, sigma = F x D (D: the scan's
 //                 diagonal; default 0); normals are kept
+//   --estimate-normals  the uniform scan's normals are dropped and
+//                 estimated as for a file of raw x y z (outliers removed,
+//                 normals oriented, detection told they are estimated)
 //   --scanner     each model is also scanned with the turntable scanner
 //                 model (scanner/scanner.h, docs/scanner.md: MeshCaster on the
 //                 mesh, --points points, the scanner seed --seed) and reconstructed from that
@@ -107,6 +110,7 @@ struct Options {
   std::filesystem::path dir;
   std::size_t points = 50000;
   double noise = 0.0;
+  bool estimateNormals = false;
   int resolution = 64;
   bool finerGrid = true;
   bool unsupportedRegions = true;
@@ -266,6 +270,11 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
       std::mt19937_64 rng(7);
       std::normal_distribution<double> gauss(0.0, sigma);
       for (Vec3& p : scan.points) p += Vec3(gauss(rng), gauss(rng), gauss(rng));
+    }
+    if (kind == ScanKind::Uniform && opt.estimateNormals) {
+      Scan raw = scanFromArrays(std::move(scan.points), {}, path.string());
+      estimatedNormals = raw.info.normalsEstimated;
+      scan = std::move(raw.cloud);
     }
     const std::filesystem::path keep =
         opt.keep.empty() ? opt.keep
@@ -458,7 +467,7 @@ std::vector<std::string> splitList(const std::string& s) {
 
 int usage(const char* argv0) {
   std::fprintf(stderr,
-               "usage: %s DIR [--points N] [--noise F] [--res R] [--models 011,039,...] "
+               "usage: %s DIR [--points N] [--noise F] [--estimate-normals] [--res R] [--models 011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-finer-grid] "
                "[--no-unsupported-regions] [--finish] [--repair-searches K] "
                "[--repair-stall S] [--repair-operations minmax|sardf|rfunction] [--seed S] "
@@ -479,6 +488,8 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       opt.points = std::size_t(std::atoll(argv[++i]));
     } else if (arg == "--noise" && hasValue) {
       opt.noise = std::atof(argv[++i]);
+    } else if (arg == "--estimate-normals") {
+      opt.estimateNormals = true;
     } else if (arg == "--res" && hasValue) {
       opt.resolution = std::atoi(argv[++i]);
     } else if (arg == "--no-finer-grid" || arg == "--no-refine-thin") {
@@ -564,6 +575,7 @@ void printHeading(const Options& opt) {
       opt.dir.string().c_str(), opt.models.size(), opt.points, opt.noise, opt.resolution,
       std::string(methodName(opt.method)).c_str(), limitText,
       opt.finerGrid ? ", finer grid where thin" : "", opt.finish ? ", finish" : "");
+  if (opt.estimateNormals) std::printf("uniform scans: normals estimated from x y z\n");
   if (opt.seed != 1) std::printf("reconstruction seed: %llu\n", (unsigned long long)opt.seed);
   if (opt.scanner) {
     std::printf(

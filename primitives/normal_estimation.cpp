@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -55,6 +56,12 @@ constexpr std::size_t kAgreementBudget = 4000 * 19;
 constexpr std::size_t kAgreementMinSamples = 250;
 // Degree of the jet (a quadric, as CGAL's jet_estimate_normals by default).
 constexpr std::size_t kJetDegree = 2;
+// dominantPlane counts a neighbour on a face's plane within this fraction of
+// the neighbourhood's radius (or kOnPlaneNoiseFactor x the noise), and
+// refuses triples whose sides' sine is below kCollinearSine.
+constexpr double kFacePlaneRadiusFraction = 0.02;
+constexpr double kCollinearSine = 0.1;
+constexpr double kEdgeOffFactor = 4.0;
 // A neighbourhood spans a surface when its second principal variance exceeds
 // this fraction of its first (else it is a line up to rounding, and a jet
 // fitted to it would be meaningless).
@@ -164,12 +171,83 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
   return hoods;
 }
 
+/// The plane through point `i` that holds most of its neighbourhood `hood`
+/// (k indices, i first) within `tolerance`: every plane through i and two
+/// neighbours is tried, and the best is refitted by least squares to the
+/// points it holds, twice. Near an edge the blended fits tilt the normal by
+/// a few degrees; this plane is the face's own. Empty when no plane holds at
+/// least half of the neighbourhood (a point on a curved surface).
+std::optional<Vector3> dominantPlane(const std::vector<Point3>& points, const std::uint32_t* hood,
+                                     unsigned k, std::size_t i, double tolerance) {
+  const Point3& p = points[i];
+  int bestCount = 0;
+  double bestSpread = 0.0;
+  Vector3 best = CGAL::NULL_VECTOR;
+  for (unsigned a = 1; a < k; ++a) {
+    const Vector3 u = points[hood[a]] - p;
+    for (unsigned b = a + 1; b < k; ++b) {
+      const Vector3 v = points[hood[b]] - p;
+      Vector3 n = CGAL::cross_product(u, v);
+      const double length = std::sqrt(n.squared_length());
+      // Nearly collinear triples give planes the rounding turns.
+      if (!(length > kCollinearSine * std::sqrt(u.squared_length() * v.squared_length()))) continue;
+      n = n / length;
+      int count = 0;
+      double spread = 0.0;
+      for (unsigned l = 0; l < k; ++l) {
+        const double d = std::abs(n * (points[hood[l]] - p));
+        if (d <= tolerance) {
+          ++count;
+          spread += d;
+        }
+      }
+      if (count > bestCount || (count == bestCount && spread < bestSpread)) {
+        bestCount = count;
+        bestSpread = spread;
+        best = n;
+      }
+    }
+  }
+  if (2 * bestCount < int(k)) return std::nullopt;
+  // The neighbours the face leaves out must lie well off it, as across an
+  // edge, not just beyond the tolerance, as on a curved surface.
+  {
+    std::vector<double> off;
+    for (unsigned l = 1; l < k; ++l) {
+      const double d = std::abs(best * (points[hood[l]] - p));
+      if (d > tolerance) off.push_back(d);
+    }
+    if (!off.empty()) {
+      std::nth_element(off.begin(), off.begin() + std::ptrdiff_t(off.size() / 2), off.end());
+      if (off[off.size() / 2] < kEdgeOffFactor * tolerance) return std::nullopt;
+    }
+  }
+  std::vector<Vec3> held;
+  for (int round = 0; round < 2; ++round) {
+    held.clear();
+    for (unsigned l = 0; l < k; ++l) {
+      if (std::abs(best * (points[hood[l]] - p)) <= tolerance || l == 0) {
+        const Point3& q = points[hood[l]];
+        held.emplace_back(q.x(), q.y(), q.z());
+      }
+    }
+    if (held.size() < 3) break;
+    const Vec3 axis = principalAxes(held).leastAxis();
+    best = Vector3(axis.x(), axis.y(), axis.z());
+  }
+  return best;
+}
+
 /// Sharpens normals near edges. The jet fit blends the normals of the faces
 /// that meet at an edge for every point within a neighbourhood of it. Each
 /// point therefore considers the tangent planes of its neighbours that pass
-/// through it (within a tolerance) and takes the normal of the plane that
-/// holds most of its neighbours, keeping its own when that is among the best.
-/// On smooth surfaces a point's own plane is the best and nothing changes.
+/// through it (within a tolerance) and takes the plane that holds most of its
+/// neighbours, keeping its own when that is among the best. That plane is a
+/// neighbour's jet, itself tilted by the face across the edge by a few
+/// degrees -- enough for RANSAC to prefer a wide cylinder along a narrow
+/// wall to its plane -- so where it leaves neighbours out, the point takes
+/// dominantPlane's face instead, when one holds half of them. On smooth
+/// surfaces a point's own plane holds every neighbour and nothing changes.
 void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& normals,
                     const Neighbourhoods& hoods) {
   const std::size_t n = points.size();
@@ -190,28 +268,38 @@ void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& nor
   const double typical = residual[n / 2];
 
   std::vector<Vector3> sharpened = normals;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t* hood = hoods.of(i);
-    const double tolerance =
-        std::max(kOnPlaneRadiusFraction * hoods.radius[i], kOnPlaneNoiseFactor * typical);
-    auto support = [&](std::size_t j) {
-      int count = 0;
-      for (unsigned l = 0; l < k; ++l) {
-        if (std::abs(normals[j] * (points[hood[l]] - points[j])) <= tolerance) ++count;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const std::uint32_t* hood = hoods.of(i);
+      const double tolerance =
+          std::max(kOnPlaneRadiusFraction * hoods.radius[i], kOnPlaneNoiseFactor * typical);
+      const double faceTolerance =
+          std::max(kFacePlaneRadiusFraction * hoods.radius[i], kOnPlaneNoiseFactor * typical);
+      // Neighbours within the tolerance of the plane through `origin` with `normal`.
+      auto support = [&](const Point3& origin, const Vector3& normal) {
+        int count = 0;
+        for (unsigned l = 0; l < k; ++l) {
+          if (std::abs(normal * (points[hood[l]] - origin)) <= tolerance) ++count;
+        }
+        return count;
+      };
+      std::size_t chosen = i;
+      int best = support(points[i], normals[i]);
+      for (unsigned c = 1; c < k; ++c) {
+        const std::size_t j = hood[c];
+        if (std::abs(normals[j] * (points[i] - points[j])) > tolerance) continue;
+        const int count = support(points[j], normals[j]);
+        if (count > best) {
+          best = count;
+          chosen = j;
+        }
       }
-      return count;
-    };
-    int best = support(i);
-    for (unsigned c = 1; c < k; ++c) {
-      const std::size_t j = hood[c];
-      if (std::abs(normals[j] * (points[i] - points[j])) > tolerance) continue;
-      const int count = support(j);
-      if (count > best) {
-        best = count;
-        sharpened[i] = normals[j];
+      sharpened[i] = normals[chosen];
+      if (best < int(k)) {
+        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance)) sharpened[i] = *face;
       }
     }
-  }
+  });
   normals = std::move(sharpened);
 }
 

@@ -49,6 +49,9 @@ using CgalSphere = CGAL::Shape_detection::Sphere<Traits>;
 using CgalTorus = CGAL::Shape_detection::Torus<Traits>;
 
 Vec3 toVec(const CPoint& p) { return {p.x(), p.y(), p.z()}; }
+
+// A cone within this angle of flat or of a cylinder is refused (radians).
+constexpr double kMinConeAngle = 2.0 * std::numbers::pi / 180.0;
 Vec3 toVec(const CVector& v) { return {v.x(), v.y(), v.z()}; }
 
 // Efficient_RANSAC draws from CGAL's thread-local default generator; this
@@ -93,6 +96,58 @@ bool majorityOutward(const PointCloud& cloud, const std::vector<std::uint32_t>& 
   return 2 * agree >= inliers.size();
 }
 
+// Whether a RANSAC shape's parameters can be one of our surfaces (as
+// convertShape judges them): finite, a radius no larger than the diagonal, a
+// cone neither within 2 degrees of flat nor of a cylinder, a torus' tube no
+// wider than its ring.
+bool plausibleParameters(const Ransac::Shape& shape, double diag) {
+  const auto finite = [](const Vec3& v) { return v.allFinite(); };
+  if (const auto* s = dynamic_cast<const CgalCylinder*>(&shape)) {
+    const Vec3 dir = toVec(s->axis().to_vector());
+    const double r = s->radius();
+    return dir.norm() > 0.0 && finite(toVec(s->axis().point())) && finite(dir) && r > 0.0 &&
+           r <= diag;
+  }
+  if (const auto* s = dynamic_cast<const CgalCone*>(&shape)) {
+    const Vec3 dir = toVec(s->axis());
+    const double angle = s->angle();
+    return dir.norm() > 0.0 && finite(toVec(s->apex())) && finite(dir) &&
+           angle >= kMinConeAngle && angle <= 0.5 * std::numbers::pi - kMinConeAngle;
+  }
+  if (const auto* s = dynamic_cast<const CgalSphere*>(&shape)) {
+    const double r = s->radius();
+    return finite(toVec(s->center())) && r > 0.0 && r <= diag;
+  }
+  if (const auto* s = dynamic_cast<const CgalTorus*>(&shape)) {
+    const Vec3 dir = toVec(s->axis());
+    const double major = s->major_radius(), minor = s->minor_radius();
+    return dir.norm() > 0.0 && finite(toVec(s->center())) && finite(dir) && minor > 0.0 &&
+           major >= minor && major <= diag;
+  }
+  return true;  // a plane
+}
+
+// The diagonal against which RANSAC's candidates are judged in this thread
+// (infinite: every candidate is scored).
+thread_local double tCandidateDiagonal = std::numeric_limits<double>::infinity();
+
+// A RANSAC shape scored only when its parameters are plausible. On normals
+// estimated from raw points, nearly parallel normals make cones, tori and
+// cylinders wide enough to touch both faces of a thin plate, or two walls,
+// at once; RANSAC extracted them for their many points, convertShape refused
+// them, and the walls' points were lost to the pass (a raw thin plate with
+// small holes: 4 planes found for 26 faces).
+template <class Base>
+class PlausibleShape : public Base {
+ protected:
+  void create_shape(const std::vector<std::size_t>& indices) override {
+    Base::create_shape(indices);
+    if (this->m_is_valid && !plausibleParameters(*this, tCandidateDiagonal)) {
+      this->m_is_valid = false;
+    }
+  }
+};
+
 // Converts a CGAL shape into a Surface on the scan's points; returns false for
 // shapes that are not plausible features of a part of diagonal D.
 bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double diag, Surface& out) {
@@ -131,9 +186,8 @@ bool convertShape(const Ransac::Shape& shape, const PointCloud& cloud, double di
     const Vec3 apex = toVec(s->apex());
     Vec3 dir = toVec(s->axis());
     const double angle = s->angle();
-    constexpr double kMinAngle = 2.0 * std::numbers::pi / 180.0;
-    if (!(dir.norm() > 0.0) || !finite(apex) || !finite(dir) || !(angle >= kMinAngle) ||
-        !(angle <= 0.5 * std::numbers::pi - kMinAngle)) {
+    if (!(dir.norm() > 0.0) || !finite(apex) || !finite(dir) || !(angle >= kMinConeAngle) ||
+        !(angle <= 0.5 * std::numbers::pi - kMinConeAngle)) {
       return false;
     }
     dir.normalize();
@@ -235,12 +289,21 @@ void validate(const PointCloud& cloud, const DetectOptions& o) {
 // selection) kept them. Each shape is final once RANSAC extracts it, so it is
 // converted and selected in a TBB task while RANSAC searches on; every task
 // writes its own slot, so the result does not depend on the scheduling.
+// With `judgeCandidates` (normals estimated from raw points), RANSAC scores
+// only candidates whose parameters are plausible (PlausibleShape).
 // Returns false when cancelled.
 bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subset,
                 const std::set<SurfaceType>& types, const Ransac::Parameters& params,
-                unsigned int seed, double diag, const std::function<bool(double)>& callback,
+                unsigned int seed, double diag, bool judgeCandidates,
+                const std::function<bool(double)>& callback,
                 const std::function<bool(Surface&)>& accept, std::vector<Surface>& found) {
   if (subset.size() < params.min_points || subset.size() < 10) return true;
+  struct ScopedDiagonal {
+    double saved;
+    ~ScopedDiagonal() { tCandidateDiagonal = saved; }
+  } scopedDiagonal{std::exchange(
+      tCandidateDiagonal,
+      judgeCandidates ? diag : std::numeric_limits<double>::infinity())};
   PwnRange input;
   input.reserve(subset.size());
   for (std::uint32_t i : subset) {
@@ -252,10 +315,10 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
   Ransac ransac;
   ransac.set_input(input);
   if (types.count(SurfaceType::Plane)) ransac.add_shape_factory<CgalPlane>();
-  if (types.count(SurfaceType::Cylinder)) ransac.add_shape_factory<CgalCylinder>();
-  if (types.count(SurfaceType::Cone)) ransac.add_shape_factory<CgalCone>();
-  if (types.count(SurfaceType::Sphere)) ransac.add_shape_factory<CgalSphere>();
-  if (types.count(SurfaceType::Torus)) ransac.add_shape_factory<CgalTorus>();
+  if (types.count(SurfaceType::Cylinder)) ransac.add_shape_factory<PlausibleShape<CgalCylinder>>();
+  if (types.count(SurfaceType::Cone)) ransac.add_shape_factory<PlausibleShape<CgalCone>>();
+  if (types.count(SurfaceType::Sphere)) ransac.add_shape_factory<PlausibleShape<CgalSphere>>();
+  if (types.count(SurfaceType::Torus)) ransac.add_shape_factory<PlausibleShape<CgalTorus>>();
   ransac.preprocess();
   // Scan index of each (reordered) input point; preprocess() was the last reordering.
   std::vector<std::uint32_t> scanIndex(input.size());
@@ -629,6 +692,11 @@ void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surfac
 // one surface and it lies within epsilon + 3 x their RMS distance from it
 // (epsilon alone on a clean scan). Its assignment does not change: the
 // final refinement decides it by distance and normal as before.
+// A leftover point whose normal is farther than this (cosine) from a
+// surface beside it lies on a face that crosses it (about 65 degrees: a
+// sharpened edge normal lies within 26 of its face, a blended one halfway).
+constexpr double kCrossingCosine = 0.42;
+
 void dropExplainedLeftovers(const PointCloud& cloud, const NearestNeighbors& nn,
                             const std::vector<Surface>& found, const std::vector<int>& assignment,
                             double epsilon, std::vector<std::uint32_t>& subset) {
@@ -657,6 +725,12 @@ void dropExplainedLeftovers(const PointCloud& cloud, const NearestNeighbors& nn,
       }
       if (votes < 2) continue;
       const double rms = std::sqrt(sum / double(votes));
+      // A point whose normal crosses the surface lies on a face of its own
+      // that meets this one (the wall of a hole in a plate thinner than a
+      // few epsilon), not on a strip of blended normals beside it.
+      if (std::abs(surfaceNormal(surface, p).dot(cloud.normals[subset[j]])) < kCrossingCosine) {
+        continue;
+      }
       if (surfaceDistance(surface, p) <= epsilon + tails * rms) {
         drop[j] = 1;
         return;
@@ -773,7 +847,7 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
       return selectModel(cloud, options, scales, result.epsilon, diag, surf);
     };
     if (!ransacPass(cloud, subset, stages[stage].types, params, passSeed(options.seed, int(stage)),
-                    diag, cb, accept, found)) {
+                    diag, options.estimatedNormals, cb, accept, found)) {
       return cancelled();
     }
     if (stage == 0) {

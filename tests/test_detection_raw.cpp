@@ -9,6 +9,7 @@
 #include "part_list.h"
 #include "primitives/normal_estimation.h"
 #include "primitives/surface_detection.h"
+#include "test_helpers.h"
 
 namespace csgvox {
 namespace {
@@ -32,9 +33,10 @@ TEST(DetectionOnEstimatedNormals, EdgeStripsDoNotBecomeSpuriousSurfaces) {
   const DetectionResult raw = detectSurfaces(cloud, estimated);
   ASSERT_TRUE(raw.ok()) << raw.message;
   // Its 7 primitives have 13 faces (9 planes, 4 cylinders), as exact
-  // normals give; trusting the estimated normals gives three times as many.
+  // normals give; trusting the estimated normals gives more (19: the
+  // strips of an edge's last few points, whose normals stay blended).
   EXPECT_LE(raw.surfaces.size(), 15u) << raw.message;
-  EXPECT_GT(plain.surfaces.size(), raw.surfaces.size() + 10) << plain.message;
+  EXPECT_GT(plain.surfaces.size(), raw.surfaces.size()) << plain.message;
   std::size_t planes = 0;
   for (const Surface& s : raw.surfaces) planes += s.type() == SurfaceType::Plane;
   EXPECT_GE(planes, 9u) << raw.message;
@@ -56,6 +58,42 @@ TEST(DetectionOnEstimatedNormals, ExactNormalsGiveTheSameSurfaces) {
   for (std::size_t i = 0; i < a.surfaces.size(); ++i) {
     EXPECT_EQ(a.surfaces[i].inliers, b.surfaces[i].inliers) << i;
   }
+}
+
+// The walls of small holes in a thin plate, from raw points: planes, as
+// exact normals give. Before, RANSAC explained them by wide cylinders (made
+// of nearly parallel estimated normals, touching two walls) or by wide
+// cones and tori it refused after they took the walls' points, and the
+// leftover test dropped the walls' points within epsilon of the plate's
+// faces: 2 planes and 6 cylinders explained 90 % of the points (now 21
+// planes, 4 cylinders and 3 cones explain 98.5 %).
+TEST(DetectionOnEstimatedNormals, NarrowWallsOfAThinPlateArePlanes) {
+  SampleOptions so;
+  so.points = 50000;
+  PointCloud cloud = sampleSurface(test::thinPlateWithTurnedHoles(), so).cloud;
+  const std::vector<Vec3> truth = cloud.normals;
+  estimateNormals(cloud, 18);
+  DetectOptions estimated;
+  estimated.estimatedNormals = true;
+  const DetectionResult found = detectSurfaces(cloud, estimated);
+  ASSERT_TRUE(found.ok()) << found.message;
+  std::size_t planes = 0;
+  for (const Surface& s : found.surfaces) planes += s.type() == SurfaceType::Plane;
+  EXPECT_GE(planes, 15u) << found.message;  // 2 + 24 walls, some coplanar
+  // The points of the walls (true normal across z) on a plane whose normal
+  // is theirs within 5 degrees.
+  std::size_t walls = 0, onTheirPlane = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    if (std::abs(truth[i].z()) > 0.1) continue;
+    ++walls;
+    const int s = found.assignment[i];
+    if (s < 0) continue;
+    const auto* plane = found.surfaces[std::size_t(s)].as<PlaneSurface>();
+    onTheirPlane += plane != nullptr && std::abs(plane->normal.dot(truth[i])) > 0.996;
+  }
+  // (0.51 now: the rest lie on a few small cylinders and cones at the holes'
+  // corners or on no surface; before, none did.)
+  EXPECT_GE(double(onTheirPlane) / double(walls), 0.4) << onTheirPlane << " of " << walls;
 }
 
 }  // namespace

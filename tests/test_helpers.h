@@ -416,4 +416,23 @@ inline void expectTreesEquivalent(const CsgTree& a, const CsgTree& b, int sample
   EXPECT_TRUE(treesEquivalent(a, b, samples, seed));
 }
 
+/// A plate 60 x 40 and 1.2 thick with six square through-holes of side 6,
+/// turned 40 degrees about z: walls narrower than a neighbourhood of a
+/// 50 000-point sample is tall, at no angle the plate's faces share (the
+/// diamond holes of InverseCSG's part 109, on which raw scans lost them).
+inline CsgTree thinPlateWithTurnedHoles() {
+  std::vector<CsgTree> parts{
+      CsgTree::leaf(Box{Vec3(0, 0, 0.6), Mat3::Identity(), Vec3(30, 20, 0.6)}, "plate")};
+  const double a = 40.0 * std::numbers::pi / 180.0;
+  Mat3 turned;
+  turned << std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1;
+  for (double x : {-16.0, 0.0, 16.0}) {
+    for (double y : {-8.0, 8.0}) {
+      parts.push_back(CsgTree::leaf(Box{Vec3(x, y, 0.6), turned, Vec3(3, 3, 1)},
+                                    "hole_" + std::to_string(parts.size())));
+    }
+  }
+  return CsgTree::subtract(parts);
+}
+
 }  // namespace csgvox::test

@@ -47,9 +47,11 @@ TEST(OrientNormals, RawScansWithAnUnseenFaceNoiseAndADoubledSurfaceFaceOutwards)
       std::vector<Vec3> truth;
       PointCloud cloud = surfaceOf(test::makeRawScan(part, o), truth);
       estimateNormals(cloud, 18);
-      // Measured: 0.987 to 0.996; the spanning forest alone gave 0.965 on
-      // the stepped shaft (caps turned inwards).
-      EXPECT_GE(signAgreement(cloud.normals, truth), 0.985);
+      // Measured: 0.983 to 0.996 (0.987 to 0.996 before edge points took
+      // their face's plane, dominantPlane in normal_estimation.cpp); the
+      // spanning forest alone gave 0.965 on the stepped shaft (caps turned
+      // inwards).
+      EXPECT_GE(signAgreement(cloud.normals, truth), 0.98);
     }
   }
 }
