@@ -87,6 +87,7 @@ Json thinJson(const std::vector<ThinFeature>& thin) {
 Json voxelCounts(const Reconstruction& rec, const Construction& c) {
   const ConstructStats& st = c.stats;
   return {{"surfaces", rec.detection.surfaces.size()},
+          {"holes_from_rims", rec.holesFromRims},
           {"hypotheses", rec.hypotheses.candidates.size()},
           {"usable_roots", st.usableRoots},
           {"truncation_roots", st.truncationRoots},

@@ -155,6 +155,13 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   SurfaceFitOptions fit;
   if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = false;
   fitSurfaces(scan, out.detection, fit);
+  if (options.rimHoles && options.detect.estimatedNormals) {
+    out.rimHoles = addRimHoles(scan, out.detection, options.rimHoleOptions);
+    if (out.rimHoles.holes > 0) {
+      out.detection.message += "; " + std::to_string(out.rimHoles.holes) + " hole" +
+                               (out.rimHoles.holes == 1 ? "" : "s") + " found from their rims";
+    }
+  }
   lap(out.fitSeconds, out.fitCpuSeconds);
   out.regularization = regularizeSurfaces(out.detection);
   lap(out.regularizeSeconds, out.regularizeCpuSeconds);

@@ -14,6 +14,7 @@
 #include "core/progress.h"
 #include "primitives/hypotheses.h"
 #include "primitives/regularization.h"
+#include "primitives/rim_holes.h"
 #include "primitives/surface_detection.h"
 #include "primitives/thin_features.h"
 #include "voxel/voxel_grid.h"
@@ -53,6 +54,12 @@ struct DetectAndFitOptions {
   /// Bytes the voxel stage may use (0: no limit): a finer grid that would
   /// need more (voxelStageBytes) falls back to `resolution`.
   std::size_t memoryLimit = 0;
+  /// With normals estimated from raw points (detect.estimatedNormals), a
+  /// round gap in a plane's points that no curved surface explains becomes a
+  /// hole cylinder (addRimHoles): a scanner sees little of a small bore's
+  /// wall, and the face around it shows the hole.
+  bool rimHoles = true;
+  RimHoleOptions rimHoleOptions;  ///< their parameters
 };
 
 /// Bytes the voxel stage needs for `candidates` on `voxels` (the
@@ -67,6 +74,7 @@ struct SurfacesAndCandidates {
   HypothesisSet hypotheses;             ///< bounded candidates (empty unless detection.ok())
   int resolution = 0;                   ///< the grid's resolution (finer than asked when thin)
   std::vector<ThinFeature> thin;        ///< features thinner than thinVoxels at the asked one
+  RimHoleStats rimHoles;                ///< holes found from their rims (rimHoles)
   double detectSeconds = 0.0;           ///< RANSAC
   double fitSeconds = 0.0;              ///< the surface fit (Ceres)
   double regularizeSeconds = 0.0;       ///< regularisation

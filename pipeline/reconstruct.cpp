@@ -249,6 +249,7 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.hypotheses = std::move(found.hypotheses);
   out.resolution = found.resolution;
   out.thin = std::move(found.thin);
+  out.holesFromRims = found.rimHoles.holes;
   out.timeLimitHit = control.pastDeadline();
   if (!fitsInMemory(out, options)) return out;
   if (control.cancelled()) return cancelledAfter(std::move(out), "hypotheses");

@@ -147,6 +147,7 @@ struct Reconstruction {
   VoxelGrid grid;
   int resolution = 0;             ///< the grid's (finer than asked when the part is thin)
   std::vector<ThinFeature> thin;  ///< features thinner than two voxels at the asked resolution
+  std::size_t holesFromRims = 0;  ///< hole cylinders found from their rims (raw scans)
   VoxelLabels labels;
   Method method = Method::Voxel;   ///< the method asked for
   MethodResult result;             ///< the method's own result (monostate when none ran)

@@ -1,0 +1,387 @@
+#include "primitives/rim_holes.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "core/nearest_neighbors.h"
+
+namespace csgvox {
+
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+
+// Angular sectors around a gap's centre; each must hold a rim point.
+constexpr int kSectors = 12;
+// Cells of one plane's occupancy grid, at most (the cell grows to fit).
+constexpr double kMaxCells = 1e6;
+// Two faces are parallel (or opposite) when their normals' dot product is
+// beyond this (about 11 degrees).
+constexpr double kParallel = 0.98;
+// Planes are one face when their normals' dot product is beyond this (about
+// 5.7 degrees) and their offsets within two epsilon.
+constexpr double kCoplanar = 0.995;
+// Fewest points that show a hole's bottom face or its wall.
+constexpr std::size_t kMinEvidence = 4;
+
+// A round gap in one plane's points.
+struct Rim {
+  std::size_t plane = 0;
+  Vec3 normal = Vec3::UnitZ();  // the plane's outward normal
+  Vec3 center = Vec3::Zero();   // on the plane
+  double radius = 0.0;
+  double cell = 0.0;                  // the occupancy cell it was found with
+  std::vector<std::uint32_t> points;  // the plane's inliers around the gap
+};
+
+// Median distance from one of `points` to its nearest other one (on at most
+// 2000 of them).
+double medianSpacing(const std::vector<Vec3>& points) {
+  if (points.size() < 2) return 0.0;
+  const NearestNeighbors nn(points);
+  const std::size_t step = std::max<std::size_t>(1, points.size() / 2000);
+  std::vector<double> d;
+  std::vector<std::uint32_t> near;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < points.size(); i += step) {
+    nn.kNearest(points[i], 2, near, &d2);
+    if (d2.size() == 2) d.push_back(std::sqrt(d2[1]));
+  }
+  if (d.empty()) return 0.0;
+  std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+// Centre of the circle through 2D points, algebraic fit (Kasa): minimises
+// sum (|q|^2 + a x + b y + c)^2. False when the points do not fix it.
+bool circleCenter(const std::vector<Vec2>& q, Vec2& center) {
+  if (q.size() < 3) return false;
+  Vec2 mean = Vec2::Zero();
+  for (const Vec2& p : q) mean += p;
+  mean /= double(q.size());
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const Vec2& p : q) {
+    const Vec2 d = p - mean;
+    const Eigen::Vector3d row(d.x(), d.y(), 1.0);
+    a += row * row.transpose();
+    rhs -= row * d.squaredNorm();
+  }
+  const Eigen::Vector3d x = a.ldlt().solve(rhs);
+  if (!x.allFinite()) return false;
+  center = mean + Vec2(-0.5 * x[0], -0.5 * x[1]);
+  return center.allFinite();
+}
+
+// The round gaps among the inliers of the coplanar plane surfaces `group`
+// (detection may split one face among several; the first holds the most
+// points and stands for them): the largest empty
+// circles among its points (maxima of their distance map on a grid of one
+// point spacing) whose edge the points follow all around. An empty circle
+// does not need the face closed around it: a hole near the edge of a narrow
+// face, whose rim the scan breaks, still counts.
+void findRims(const PointCloud& cloud, const DetectionResult& result,
+              const std::vector<std::size_t>& group, const RimHoleOptions& options,
+              std::vector<Rim>& rims, RimHoleStats& stats) {
+  const std::size_t s = group.front();
+  const auto* plane = result.surfaces[s].as<PlaneSurface>();
+  std::vector<std::uint32_t> inliers;
+  for (std::size_t t : group) {
+    const std::vector<std::uint32_t>& more = result.surfaces[t].inliers;
+    inliers.insert(inliers.end(), more.begin(), more.end());
+  }
+  if (inliers.size() < options.minPlaneInliers) return;
+  const Mat3 frame = frameFromAxis(plane->normal);
+  const Vec3 u = frame.col(0), v = frame.col(1);
+  // The points in the plane's frame (z = 0), for distances along it.
+  std::vector<Vec3> flat(inliers.size());
+  Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t k = 0; k < inliers.size(); ++k) {
+    const Vec3& p = cloud.points[inliers[k]];
+    flat[k] = Vec3(p.dot(u), p.dot(v), 0.0);
+    lo = lo.cwiseMin(flat[k].head<2>());
+    hi = hi.cwiseMax(flat[k].head<2>());
+  }
+  const double spacing = medianSpacing(flat);
+  if (!(spacing > 0.0)) return;
+  const NearestNeighbors nn(flat);
+  double cell = spacing;
+  const Vec2 size = hi - lo;
+  if ((size.x() / cell + 1.0) * (size.y() / cell + 1.0) > kMaxCells) {
+    cell = std::sqrt(size.x() * size.y() / kMaxCells) + 1e-12 * (size.x() + size.y());
+  }
+  const int w = int(size.x() / cell) + 1, h = int(size.y() / cell) + 1;
+  const auto centre = [&](int x, int y) {
+    return Vec2(lo.x() + (x + 0.5) * cell, lo.y() + (y + 0.5) * cell);
+  };
+  // Distance from each cell's centre to the nearest point.
+  std::vector<double> empty(std::size_t(w) * std::size_t(h));
+  {
+    std::vector<std::uint32_t> near;
+    std::vector<double> d2;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const Vec2 c = centre(x, y);
+        nn.kNearest(Vec3(c.x(), c.y(), 0.0), 1, near, &d2);
+        empty[std::size_t(y) * std::size_t(w) + std::size_t(x)] = std::sqrt(d2[0]);
+      }
+    }
+  }
+  const double minRadius = options.minRadiusSpacings * spacing;
+  const double maxRadius = options.maxRadius * result.diagonal;
+  // Centres: local maxima of the distance (the sector test below tells a
+  // hole from the room beside a face's edge).
+  struct Candidate {
+    Vec2 center;
+    double radius;
+  };
+  std::vector<Candidate> candidates;
+  for (int y = 1; y + 1 < h; ++y) {
+    for (int x = 1; x + 1 < w; ++x) {
+      const std::size_t c = std::size_t(y) * std::size_t(w) + std::size_t(x);
+      const double r = empty[c];
+      if (r < minRadius || r > maxRadius) continue;
+      bool peak = true;
+      for (int dy = -1; dy <= 1 && peak; ++dy) {
+        for (int dx = -1; dx <= 1 && peak; ++dx) {
+          const std::size_t n = std::size_t(y + dy) * std::size_t(w) + std::size_t(x + dx);
+          // Ties go to the first cell, so a plateau gives one peak.
+          if (n != c && (empty[n] > r || (empty[n] == r && n < c))) peak = false;
+        }
+      }
+      const Vec2 p = centre(x, y);
+      if (!peak) continue;
+      candidates.push_back({p, r});
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.radius > b.radius ||
+           (a.radius == b.radius && (a.center.x() < b.center.x() || (a.center.x() == b.center.x() &&
+                                                                     a.center.y() < b.center.y())));
+  });
+  std::vector<Candidate> taken;
+  std::vector<std::uint32_t> near;
+  std::vector<double> d2;
+  for (const Candidate& cand : candidates) {
+    if (std::any_of(taken.begin(), taken.end(), [&](const Candidate& t) {
+          return (t.center - cand.center).norm() < t.radius + cand.radius;
+        })) {
+      continue;
+    }
+    // The points around the circle, then its centre fitted to them.
+    const double reach = cand.radius * (1.0 + options.roundness) + 2.0 * spacing;
+    std::vector<std::size_t> band;
+    for (std::size_t k = 0; k < flat.size(); ++k) {
+      if ((flat[k].head<2>() - cand.center).norm() <= reach) band.push_back(k);
+    }
+    std::vector<Vec2> bq;
+    for (std::size_t k : band) bq.push_back(flat[k].head<2>());
+    Vec2 center = cand.center;
+    if (Vec2 fitted; circleCenter(bq, fitted) &&
+                     (fitted - cand.center).norm() <= std::max(spacing, 0.25 * cand.radius)) {
+      center = fitted;
+    }
+    // The nearest point of each sector: a round hole's rim lies at its
+    // radius all around, a slot's, a square's or a face's notch does not.
+    std::array<double, kSectors> nearest;
+    nearest.fill(std::numeric_limits<double>::infinity());
+    for (const Vec2& p : bq) {
+      const Vec2 d = p - center;
+      const double angle = std::atan2(d.y(), d.x()) + std::numbers::pi;
+      const int sector = std::min(kSectors - 1, int(angle / (2.0 * std::numbers::pi) * kSectors));
+      nearest[std::size_t(sector)] = std::min(nearest[std::size_t(sector)], d.norm());
+    }
+    if (!std::all_of(nearest.begin(), nearest.end(), [](double r) { return std::isfinite(r); })) {
+      continue;
+    }
+    std::array<double, kSectors> sorted = nearest;
+    std::sort(sorted.begin(), sorted.end());
+    const double radius = 0.5 * (sorted[kSectors / 2 - 1] + sorted[kSectors / 2]);
+    if (radius > maxRadius ||
+        sorted.back() - sorted.front() > options.roundness * radius + 0.5 * spacing) {
+      continue;
+    }
+    // The rim: the points of the innermost ring; the gap must be wide for
+    // their own spacing (a sparse patch has gaps of a spacing or two).
+    std::vector<std::uint32_t> ring;
+    std::vector<double> gaps;
+    for (std::size_t k : band) {
+      if ((flat[k].head<2>() - center).norm() > radius + 2.0 * spacing) continue;
+      ring.push_back(inliers[k]);
+      nn.kNearest(flat[k], 2, near, &d2);
+      if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
+    }
+    if (gaps.empty()) continue;
+    std::nth_element(gaps.begin(), gaps.begin() + std::ptrdiff_t(gaps.size() / 2), gaps.end());
+    if (radius < options.minRadiusSpacings * gaps[gaps.size() / 2]) continue;
+    taken.push_back({center, radius});
+    ++stats.gaps;
+    Rim r;
+    r.plane = s;
+    r.normal = plane->normal;
+    r.center = plane->offset * plane->normal + center.x() * u + center.y() * v;
+    r.radius = radius;
+    r.cell = spacing;
+    r.points = std::move(ring);
+    rims.push_back(std::move(r));
+  }
+}
+
+// True when a curved surface passes along most of the rim's circle (within
+// two epsilon plus the circle's own uncertainty, a point spacing): the hole's
+// wall, a countersink or a boss standing on the face was found already.
+bool explained(const DetectionResult& result, const Rim& rim) {
+  constexpr int kSamples = 24;
+  const Mat3 frame = frameFromAxis(rim.normal);
+  const double tolerance = 2.0 * result.epsilon + rim.cell;
+  for (const Surface& surface : result.surfaces) {
+    if (surface.as<PlaneSurface>()) continue;
+    int near = 0;
+    for (int k = 0; k < kSamples; ++k) {
+      const double a = 2.0 * std::numbers::pi * k / kSamples;
+      const Vec3 p =
+          rim.center + rim.radius * (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
+      near += surfaceDistance(surface, p) <= tolerance ? 1 : 0;
+    }
+    if (2 * near >= kSamples) return true;
+  }
+  return false;
+}
+
+// Component of d across the unit axis n.
+Vec3 lateral(const Vec3& d, const Vec3& n) { return d - d.dot(n) * n; }
+
+}  // namespace
+
+RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
+                         const RimHoleOptions& options) {
+  RimHoleStats stats;
+  if (!result.ok() || result.surfaces.empty() || cloud.empty()) return stats;
+  std::vector<Rim> rims;
+  const std::size_t found = result.surfaces.size();
+  std::vector<char> grouped(found, 0);
+  for (std::size_t s = 0; s < found; ++s) {
+    const auto* p = result.surfaces[s].as<PlaneSurface>();
+    if (p == nullptr || grouped[s]) continue;
+    std::vector<std::size_t> group;
+    for (std::size_t t = s; t < found; ++t) {
+      const auto* q = result.surfaces[t].as<PlaneSurface>();
+      if (q == nullptr || grouped[t] || p->normal.dot(q->normal) < kCoplanar ||
+          std::abs(p->offset - q->offset) > 2.0 * result.epsilon) {
+        continue;
+      }
+      grouped[t] = 1;
+      group.push_back(t);
+    }
+    findRims(cloud, result, group, options, rims, stats);
+  }
+  if (rims.empty()) return stats;
+  std::vector<char> used(rims.size(), 0);
+  for (std::size_t a = 0; a < rims.size(); ++a) {
+    if (explained(result, rims[a])) {
+      used[a] = 1;
+      ++stats.explained;
+    }
+  }
+  const double eps = result.epsilon;
+  const Aabb bounds = cloud.bounds();
+  for (std::size_t a = 0; a < rims.size(); ++a) {
+    if (used[a]) continue;
+    const Rim& ra = rims[a];
+    const Vec3 n = ra.normal;
+    // How deep the part reaches behind the face, along -n.
+    double reach = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? bounds.max.x() : bounds.min.x(),
+                   (corner & 2) ? bounds.max.y() : bounds.min.y(),
+                   (corner & 4) ? bounds.max.z() : bounds.min.z());
+      reach = std::max(reach, (ra.center - p).dot(n));
+    }
+    std::vector<std::uint32_t> evidence = ra.points;
+    double depth = -1.0;  // of the hole's known bottom, or -1
+    Vec3 center = ra.center;
+    double radius = ra.radius;
+    // The same gap in the opposite face: a through hole.
+    std::size_t partner = rims.size();
+    double partnerDepth = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < rims.size(); ++b) {
+      if (used[b] || b == a || rims[b].normal.dot(n) > -kParallel) continue;
+      const Rim& rb = rims[b];
+      const Vec3 d = rb.center - ra.center;
+      const double along = -d.dot(n);
+      const double tolerance = std::max(0.25 * std::min(ra.radius, rb.radius), 2.0 * eps);
+      if (along <= eps || lateral(d, n).norm() > tolerance) continue;
+      if (std::max(ra.radius, rb.radius) > 1.4 * std::min(ra.radius, rb.radius)) continue;
+      if (along < partnerDepth) partnerDepth = along, partner = b;
+    }
+    if (partner < rims.size()) {
+      const Rim& rb = rims[partner];
+      used[partner] = 1;
+      depth = partnerDepth;
+      evidence.insert(evidence.end(), rb.points.begin(), rb.points.end());
+      const double wa = double(ra.points.size()), wb = double(rb.points.size());
+      radius = (wa * ra.radius + wb * rb.radius) / (wa + wb);
+      center = ra.center + wb / (wa + wb) * lateral(rb.center - ra.center, n);
+    } else {
+      // A face that looks the same way, seen through the gap: the hole's
+      // bottom (a blind hole's floor, a counterbore's step).
+      std::vector<std::uint32_t> floor;
+      for (std::size_t s = 0; s < found; ++s) {
+        const auto* p = result.surfaces[s].as<PlaneSurface>();
+        if (p == nullptr || s == ra.plane || p->normal.dot(n) < kParallel) continue;
+        const double below = ra.center.dot(p->normal) - p->offset;
+        if (below <= eps || (depth >= 0.0 && below >= depth)) continue;
+        std::vector<std::uint32_t> inside;
+        for (std::uint32_t i : result.surfaces[s].inliers) {
+          if (lateral(cloud.points[i] - ra.center, n).norm() <= ra.radius) inside.push_back(i);
+        }
+        if (inside.size() < kMinEvidence) continue;
+        depth = below;
+        floor = std::move(inside);
+      }
+      evidence.insert(evidence.end(), floor.begin(), floor.end());
+    }
+    // The wall's own points that no surface holds.
+    const double band = std::max(eps, ra.cell);
+    const double deepest = depth >= 0.0 ? depth + eps : reach;
+    std::vector<std::uint32_t> wall;
+    double wallDepth = 0.0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (result.assignment[i] >= 0) continue;
+      const Vec3 d = cloud.points[i] - center;
+      const double t = -d.dot(n);
+      if (t < -eps || t > deepest) continue;
+      if (std::abs(lateral(d, n).norm() - radius) > band) continue;
+      wall.push_back(std::uint32_t(i));
+      wallDepth = std::max(wallDepth, t);
+    }
+    if (depth < 0.0 && (wall.size() < kMinEvidence || wallDepth <= 2.0 * eps)) continue;
+    used[a] = 1;
+    Surface hole;
+    hole.shape = CylinderSurface{center, n, radius};
+    hole.convex = false;
+    hole.rms = std::max(result.noise, 1e-9 * result.diagonal);
+    evidence.insert(evidence.end(), wall.begin(), wall.end());
+    std::sort(evidence.begin(), evidence.end());
+    evidence.erase(std::unique(evidence.begin(), evidence.end()), evidence.end());
+    hole.inliers = std::move(evidence);
+    const int index = int(result.surfaces.size());
+    for (std::uint32_t i : wall) result.assignment[i] = index;
+    Vec3 sum = Vec3::Zero();
+    for (std::uint32_t i : hole.inliers) sum += cloud.points[i];
+    if (result.centroids.size() == result.surfaces.size()) {
+      result.centroids.push_back(sum / double(hole.inliers.size()));
+    }
+    result.surfaces.push_back(std::move(hole));
+    ++stats.holes;
+  }
+  return stats;
+}
+
+}  // namespace csgvox

@@ -1,0 +1,52 @@
+#pragma once
+/// Holes found from their rims. A scanner looks into a small bore at a steep
+/// angle and sees few points of its wall, too few for RANSAC; the face around
+/// it is seen well and shows the hole as a round gap among its points. Each
+/// such gap becomes a hole cylinder, its axis along the face's normal:
+/// through the part when the opposite face shows the same gap, down to the
+/// face seen at the bottom of the hole (a counterbore's step, a blind hole's
+/// floor), or as deep as the wall's own points go.
+
+#include <cstddef>
+
+#include "core/point_cloud.h"
+#include "primitives/surface_detection.h"
+
+namespace csgvox {
+
+/// Parameters of addRimHoles.
+struct RimHoleOptions {
+  /// Smallest hole radius, in units of the median spacing of the rim's
+  /// points (ratio): a sparse patch of a face has gaps of one or two spacings.
+  double minRadiusSpacings = 2.5;
+  /// Largest hole radius, fraction of the diagonal D.
+  double maxRadius = 0.15;
+  /// A gap is round when the nearest points of its 12 angular sectors lie at
+  /// distances from its centre that spread by at most this fraction of the
+  /// radius, plus half a point spacing (ratio). A slot's spread by its
+  /// length over its width; a square's by only 15 %: a square hole reads as a
+  /// round one.
+  double roundness = 0.2;
+  /// Fewest inliers of a plane searched for gaps (count).
+  std::size_t minPlaneInliers = 100;
+};
+
+/// What addRimHoles found.
+struct RimHoleStats {
+  std::size_t gaps = 0;       ///< round gaps found in the planes
+  std::size_t explained = 0;  ///< of those, rims that a curved surface found already explains
+  std::size_t holes = 0;      ///< hole cylinders added
+};
+
+/// Adds a hole cylinder (convex false) to `result` for each round gap in a
+/// plane's points that no curved surface of `result` explains and whose
+/// depth the scan shows (a matching gap in the opposite face, a face at the
+/// bottom, or the wall's own points). The new surface's inliers are the rim
+/// points of the gap (still assigned to their plane: they give the hole's
+/// position and ends), the bottom face's points inside it and the wall points
+/// no surface held (those are assigned to it). `result` must be the output of
+/// fitSurfaces (its centroids are kept up to date).
+RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
+                         const RimHoleOptions& options = {});
+
+}  // namespace csgvox

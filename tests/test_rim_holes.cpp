@@ -1,0 +1,242 @@
+// Holes found from their rims: round gaps in a face's points become hole
+// cylinders when the scan shows how deep they go, and nothing else does.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <vector>
+
+#include "primitives/rim_holes.h"
+
+namespace csgvox {
+namespace {
+
+// A plate [-20, 20] x [-15, 15] x [-2, 2]; its faces sampled on a jittered
+// grid of `step`, without the points that `keep` refuses. Each face is one
+// plane surface of the result (the points assigned to it).
+struct Scan {
+  PointCloud cloud;
+  DetectionResult result;
+
+  void face(const Vec3& normal, double offset, const std::function<bool(const Vec3&)>& keep,
+            const Vec3& lo, const Vec3& hi, double step, std::mt19937& rng) {
+    std::uniform_real_distribution<double> jitter(-0.3 * step, 0.3 * step);
+    Surface surface;
+    surface.shape = PlaneSurface{normal, offset};
+    surface.rms = 0.01;
+    for (double x = lo.x(); x <= hi.x() + 1e-9; x += step) {
+      for (double y = lo.y(); y <= hi.y() + 1e-9; y += step) {
+        for (double z = lo.z(); z <= hi.z() + 1e-9; z += step) {
+          Vec3 p(x, y, z);
+          for (int k = 0; k < 3; ++k) {
+            if (normal[k] == 0.0) p[k] += jitter(rng);
+          }
+          if (!keep(p)) continue;
+          surface.inliers.push_back(std::uint32_t(cloud.size()));
+          result.assignment.push_back(int(result.surfaces.size()));
+          cloud.points.push_back(p);
+          cloud.normals.push_back(normal);
+        }
+      }
+    }
+    result.surfaces.push_back(std::move(surface));
+  }
+
+  // Points of no surface on the wall of the hole of radius r about the z
+  // axis through (cx, cy), from z0 to z1.
+  void wall(double cx, double cy, double r, double z0, double z1, int count, std::mt19937& rng) {
+    std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), z(z0, z1);
+    for (int k = 0; k < count; ++k) {
+      const double a = angle(rng);
+      cloud.points.emplace_back(cx + r * std::cos(a), cy + r * std::sin(a), z(rng));
+      cloud.normals.emplace_back(-std::cos(a), -std::sin(a), 0.0);
+      result.assignment.push_back(-1);
+    }
+  }
+
+  void finish() {
+    result.status = DetectionResult::Status::Ok;
+    result.diagonal = cloud.diagonal();
+    result.noise = 0.01;
+    result.epsilon = 0.1;
+    result.centroids.assign(result.surfaces.size(), Vec3::Zero());
+  }
+};
+
+struct Hole {
+  double x, y, r;
+};
+
+// Outside every hole of `holes` (by a margin of `grow`).
+std::function<bool(const Vec3&)> outside(std::vector<Hole> holes, double grow = 0.0) {
+  return [holes, grow](const Vec3& p) {
+    return std::all_of(holes.begin(), holes.end(), [&](const Hole& h) {
+      return std::hypot(p.x() - h.x, p.y() - h.y) > h.r + grow;
+    });
+  };
+}
+
+const auto anywhere = [](const Vec3&) { return true; };
+
+// The plate's four sides.
+void sides(Scan& scan, double step, std::mt19937& rng) {
+  scan.face(Vec3::UnitX(), 20.0, anywhere, Vec3(20, -15, -2), Vec3(20, 15, 2), step, rng);
+  scan.face(-Vec3::UnitX(), 20.0, anywhere, Vec3(-20, -15, -2), Vec3(-20, 15, 2), step, rng);
+  scan.face(Vec3::UnitY(), 15.0, anywhere, Vec3(-20, 15, -2), Vec3(20, 15, 2), step, rng);
+  scan.face(-Vec3::UnitY(), 15.0, anywhere, Vec3(-20, -15, -2), Vec3(20, -15, 2), step, rng);
+}
+
+std::vector<const CylinderSurface*> holesOf(const DetectionResult& result, std::size_t from) {
+  std::vector<const CylinderSurface*> out;
+  for (std::size_t s = from; s < result.surfaces.size(); ++s) {
+    if (const auto* c = result.surfaces[s].as<CylinderSurface>()) out.push_back(c);
+  }
+  return out;
+}
+
+TEST(RimHoles, ThroughHolesSeenOnlyFromTheirRimsBecomeCylindersThroughThePlate) {
+  // Four through holes of radius 2 whose walls the scan missed entirely:
+  // the top and bottom faces show the same round gaps.
+  std::mt19937 rng(3);
+  const std::vector<Hole> holes{{-12, -7, 2}, {12, -7, 2}, {-12, 7, 2}, {12, 7, 2}};
+  Scan scan;
+  scan.face(Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  sides(scan, 0.4, rng);
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(stats.gaps, 8u);  // each hole in both faces
+  EXPECT_EQ(stats.explained, 0u);
+  ASSERT_EQ(stats.holes, 4u);
+  const auto found = holesOf(scan.result, before);
+  ASSERT_EQ(found.size(), 4u);
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    const CylinderSurface& c = *found[k];
+    const Surface& surface = scan.result.surfaces[before + k];
+    EXPECT_FALSE(surface.convex);
+    EXPECT_GT(std::abs(c.axisDir.z()), 0.9999);
+    // The rim's points lie up to a spacing outside the hole: the radius
+    // comes out within a spacing (0.4) above the truth.
+    EXPECT_GT(c.radius, 1.95);
+    EXPECT_LT(c.radius, 2.4);
+    const bool near = std::any_of(holes.begin(), holes.end(), [&](const Hole& h) {
+      const Vec3 d = c.axisPoint - Vec3(h.x, h.y, 0.0);
+      return (d - d.dot(c.axisDir) * c.axisDir).norm() < 0.15;
+    });
+    EXPECT_TRUE(near) << c.axisPoint.transpose();
+    // Its points span the plate, so its bounded primitive goes through.
+    double lo = 1e9, hi = -1e9;
+    for (std::uint32_t i : surface.inliers) {
+      lo = std::min(lo, scan.cloud.points[i].z());
+      hi = std::max(hi, scan.cloud.points[i].z());
+    }
+    EXPECT_NEAR(lo, -2.0, 1e-9);
+    EXPECT_NEAR(hi, 2.0, 1e-9);
+  }
+  EXPECT_EQ(scan.result.centroids.size(), scan.result.surfaces.size());
+}
+
+TEST(RimHoles, ABlindHoleEndsOnTheFloorSeenThroughIt) {
+  // A blind hole of radius 3, 1.5 deep, from the top: its floor (a face
+  // looking up) is seen through the gap; the bottom face has no gap.
+  std::mt19937 rng(5);
+  const Hole hole{0, 0, 3};
+  Scan scan;
+  scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, anywhere, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  scan.face(
+      Vec3::UnitZ(), 0.5, [&](const Vec3& p) { return !outside({hole})(p); }, Vec3(-3, -3, 0.5),
+      Vec3(3, 3, 0.5), 0.4, rng);
+  sides(scan, 0.4, rng);
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  ASSERT_EQ(stats.holes, 1u);
+  const Surface& surface = scan.result.surfaces[before];
+  const auto* c = surface.as<CylinderSurface>();
+  ASSERT_NE(c, nullptr);
+  EXPECT_GT(c->radius, 2.95);
+  EXPECT_LT(c->radius, 3.4);
+  double lo = 1e9, hi = -1e9;
+  for (std::uint32_t i : surface.inliers) {
+    lo = std::min(lo, scan.cloud.points[i].z());
+    hi = std::max(hi, scan.cloud.points[i].z());
+  }
+  EXPECT_NEAR(lo, 0.5, 1e-9);
+  EXPECT_NEAR(hi, 2.0, 1e-9);
+}
+
+TEST(RimHoles, AHoleSeenFromOneSideGoesAsDeepAsItsWallPoints) {
+  // The bottom face was never seen (one setup) and the hole's wall shows
+  // only its top 2.5 of 4: the hole goes that deep, its wall points join it.
+  std::mt19937 rng(7);
+  const Hole hole{5, 0, 2};
+  Scan scan;
+  scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  sides(scan, 0.4, rng);
+  scan.wall(hole.x, hole.y, hole.r, -0.5, 2.0, 40, rng);
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  ASSERT_EQ(stats.holes, 1u);
+  const Surface& surface = scan.result.surfaces[before];
+  double lo = 1e9;
+  std::size_t wall = 0;
+  for (std::uint32_t i : surface.inliers) {
+    lo = std::min(lo, scan.cloud.points[i].z());
+    wall += scan.result.assignment[i] == int(before) ? 1 : 0;
+  }
+  EXPECT_EQ(wall, 40u);  // the wall points are now the hole's
+  EXPECT_LT(lo, -0.4);
+  EXPECT_GT(lo, -0.6);
+}
+
+TEST(RimHoles, NothingIsInventedWhereTheScanShowsNoDepthOrTheGapIsNotRound) {
+  std::mt19937 rng(11);
+  // A round gap in the top face only, with no wall points, no floor and no
+  // matching gap below (the bottom face has none): no evidence of a hole.
+  // A slot (8 x 4) through both faces is not round.
+  const Hole hole{-8, 0, 2};
+  const auto square = [](const Vec3& p) {
+    return std::abs(p.x() - 8.0) > 4.0 || std::abs(p.y()) > 2.0;
+  };
+  const auto top = [&](const Vec3& p) { return outside({hole})(p) && square(p); };
+  Scan scan;
+  scan.face(Vec3::UnitZ(), 2.0, top, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, square, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  sides(scan, 0.4, rng);
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(stats.gaps, 1u);  // the round one
+  EXPECT_EQ(stats.holes, 0u);
+  EXPECT_EQ(scan.result.surfaces.size(), before);
+}
+
+TEST(RimHoles, AGapThatACurvedSurfaceExplainsIsLeftToIt) {
+  // The hole's wall was detected (a cylinder through its rim): the gap adds
+  // nothing.
+  std::mt19937 rng(13);
+  const Hole hole{0, 0, 2.5};
+  Scan scan;
+  scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  Surface wall;
+  wall.shape = CylinderSurface{Vec3::Zero(), Vec3::UnitZ(), 2.6};
+  wall.convex = false;
+  scan.result.surfaces.push_back(wall);
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(stats.gaps, 2u);
+  EXPECT_EQ(stats.explained, 2u);
+  EXPECT_EQ(stats.holes, 0u);
+  EXPECT_EQ(scan.result.surfaces.size(), before);
+}
+
+}  // namespace
+}  // namespace csgvox
