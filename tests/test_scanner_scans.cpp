@@ -38,8 +38,7 @@ const std::vector<KnownGap> kKnownGaps = {
      "without); the rest not yet analysed"},
     {"knob", 0.91, "IoU 0.961, 9 primitives for 6; cause not yet analysed"},
     {"pipe_tee", 0.71, "IoU 0.764, 7 primitives for 4; cause not yet analysed"},
-    {"sheet_bracket", 0.49,
-     "IoU 0.540, 8 primitives for 5 (1.5 mm sheet); cause not yet analysed"},
+    {"sheet_bracket", 0.49, "IoU 0.540, 8 primitives for 5 (1.5 mm sheet); cause not yet analysed"},
     {"thin_tray", 0.05,
      "IoU 0.096: 1 mm walls one sample spacing apart; about half the normals inward and the "
      "noise estimated at 0.48 (the wall's two faces), the tray is filled"},
