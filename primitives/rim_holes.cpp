@@ -19,6 +19,8 @@ using Vec2 = Eigen::Vector2d;
 
 // Angular sectors around a gap's centre; each must hold a rim point.
 constexpr int kSectors = 12;
+// Points of one face searched for gaps, at most.
+constexpr std::size_t kMaxFacePoints = 40000;
 // Cells of one plane's occupancy grid, at most (the cell grows to fit).
 constexpr double kMaxCells = 1e6;
 // Two faces are parallel (or opposite) when their normals' dot product is
@@ -97,6 +99,17 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     inliers.insert(inliers.end(), more.begin(), more.end());
   }
   if (inliers.size() < options.minPlaneInliers) return;
+  // A face of a big scan is searched on every k-th of its points: the gaps
+  // that matter are several spacings wide, and the distance map's cells
+  // follow the spacing.
+  if (inliers.size() > kMaxFacePoints) {
+    std::sort(inliers.begin(), inliers.end());
+    const std::size_t n = inliers.size();
+    std::vector<std::uint32_t> every;
+    for (std::size_t k = 0; k < kMaxFacePoints; ++k)
+      every.push_back(inliers[k * n / kMaxFacePoints]);
+    inliers = std::move(every);
+  }
   const Mat3 frame = frameFromAxis(plane->normal);
   const Vec3 u = frame.col(0), v = frame.col(1);
   // The points in the plane's frame (z = 0), for distances along it.
