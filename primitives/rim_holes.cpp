@@ -83,9 +83,9 @@ bool circleCenter(const std::vector<Vec2>& q, Vec2& center) {
 
 // The round gaps among the inliers of the coplanar plane surfaces `group`
 // (detection may split one face among several; the first holds the most
-// points and stands for them): the largest empty
-// circles among its points (maxima of their distance map on a grid of one
-// point spacing) whose edge the points follow all around. An empty circle
+// points and stands for them): the largest empty circles among its points
+// (maxima of their distance map on a grid of one point spacing) whose edge
+// the points follow all around. An empty circle
 // does not need the face closed around it: a hole near the edge of a narrow
 // face, whose rim the scan breaks, still counts.
 void findRims(const PointCloud& cloud, const DetectionResult& result,
@@ -106,8 +106,9 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     std::sort(inliers.begin(), inliers.end());
     const std::size_t n = inliers.size();
     std::vector<std::uint32_t> every;
-    for (std::size_t k = 0; k < kMaxFacePoints; ++k)
+    for (std::size_t k = 0; k < kMaxFacePoints; ++k) {
       every.push_back(inliers[k * n / kMaxFacePoints]);
+    }
     inliers = std::move(every);
   }
   const Mat3 frame = frameFromAxis(plane->normal);
@@ -168,9 +169,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
           if (n != c && (empty[n] > r || (empty[n] == r && n < c))) peak = false;
         }
       }
-      const Vec2 p = centre(x, y);
-      if (!peak) continue;
-      candidates.push_back({p, r});
+      if (peak) candidates.push_back({centre(x, y), r});
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
