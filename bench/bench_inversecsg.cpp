@@ -302,6 +302,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     res.status = statusName(rec.status);
     res.note = scanNote + rec.message;
     if (rec.resolution != opt.resolution) res.note += ", res " + std::to_string(rec.resolution);
+    if (rec.holesFromRims > 0) {
+      res.note += ", " + std::to_string(rec.holesFromRims) + " holes from their rims";
+    }
     if (rec.timeLimitHit) res.note += " (time limit hit)";
     if (!rec.ok()) return res;
     if (!keep.empty()) writeTreeJson(keep / "tree.json", rec.tree);

@@ -29,6 +29,9 @@ constexpr double kParallel = 0.98;
 // Planes are one face when their normals' dot product is beyond this (about
 // 5.7 degrees) and their offsets within two epsilon.
 constexpr double kCoplanar = 0.995;
+// A wall point's normal makes at least 45 degrees with the hole's axis
+// (|cos| at most this).
+constexpr double kAcrossAxis = 0.7;
 // Fewest points that show a hole's bottom face or its wall.
 constexpr std::size_t kMinEvidence = 4;
 
@@ -359,20 +362,28 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
       }
       evidence.insert(evidence.end(), floor.begin(), floor.end());
     }
-    // The wall's own points that no surface holds.
+    // The wall's own points that no surface holds (their normals across
+    // the axis: a face below, under a boss whose top is the gap, is no
+    // wall), and the points inside the hole, of which there should be none
+    // between its ends: a gap where a small boss stands on the face (the
+    // boss not detected) has the face under it, or the boss's own points.
     const double band = std::max(eps, ra.cell);
     const double deepest = depth >= 0.0 ? depth + eps : reach;
     std::vector<std::uint32_t> wall;
     double wallDepth = 0.0;
+    std::size_t inside = 0;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
-      if (result.assignment[i] >= 0) continue;
       const Vec3 d = cloud.points[i] - center;
       const double t = -d.dot(n);
       if (t < -eps || t > deepest) continue;
-      if (std::abs(lateral(d, n).norm() - radius) > band) continue;
+      const double rho = lateral(d, n).norm();
+      if (rho < radius - band && t > eps && (depth < 0.0 || t < depth - eps)) ++inside;
+      if (result.assignment[i] >= 0 || std::abs(rho - radius) > band) continue;
+      if (std::abs(cloud.normals[i].dot(n)) > kAcrossAxis) continue;
       wall.push_back(std::uint32_t(i));
       wallDepth = std::max(wallDepth, t);
     }
+    if (inside > kMinEvidence + wall.size() / 10) continue;
     if (depth < 0.0 && (wall.size() < kMinEvidence || wallDepth <= 2.0 * eps)) continue;
     used[a] = 1;
     Surface hole;
