@@ -217,6 +217,39 @@ TEST(RimHoles, NothingIsInventedWhereTheScanShowsNoDepthOrTheGapIsNotRound) {
   EXPECT_EQ(scan.result.surfaces.size(), before);
 }
 
+TEST(RimHoles, ASmallBossOnTheFaceIsNoHole) {
+  // A boss of radius 2 stands on the top face, its side not detected (no
+  // surface holds its points); the bottom face, below it, is left to no
+  // surface either. The top face's round gap is the boss's foot, and the
+  // bottom face's points under it lie on the circle's band: they are no
+  // wall (their normals run along the axis) and they are inside the hole.
+  std::mt19937 rng(17);
+  const Hole boss{0, 0, 2};
+  Scan scan;
+  scan.face(Vec3::UnitZ(), 2.0, outside({boss}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(
+      Vec3::UnitZ(), 4.0, [&](const Vec3& p) { return !outside({boss})(p); }, Vec3(-2, -2, 4),
+      Vec3(2, 2, 4), 0.4, rng);
+  sides(scan, 0.4, rng);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), z(2.0, 4.0);
+  for (int k = 0; k < 60; ++k) {
+    const double a = angle(rng);
+    scan.cloud.points.emplace_back(2.0 * std::cos(a), 2.0 * std::sin(a), z(rng));
+    scan.cloud.normals.emplace_back(std::cos(a), std::sin(a), 0.0);
+    scan.result.assignment.push_back(-1);
+  }
+  std::uniform_real_distribution<double> x(-20, 20), y(-15, 15);
+  for (int k = 0; k < 6000; ++k) {
+    scan.cloud.points.emplace_back(x(rng), y(rng), -2.0);
+    scan.cloud.normals.push_back(-Vec3::UnitZ());
+    scan.result.assignment.push_back(-1);
+  }
+  scan.finish();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(stats.gaps, 1u);
+  EXPECT_EQ(stats.holes, 0u);
+}
+
 TEST(RimHoles, AGapThatACurvedSurfaceExplainsIsLeftToIt) {
   // The hole's wall was detected (a cylinder through its rim): the gap adds
   // nothing.
