@@ -1,15 +1,16 @@
 #include "primitives/rim_holes.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <tuple>
 #include <vector>
 
 #include "core/nearest_neighbors.h"
+#include "primitives/surface_fit_internal.h"
 
 namespace csgvox {
 
@@ -21,7 +22,7 @@ using Vec2 = Eigen::Vector2d;
 constexpr int kSectors = 12;
 // Points of one face searched for gaps, at most.
 constexpr std::size_t kMaxFacePoints = 40000;
-// Cells of one plane's occupancy grid, at most (the cell grows to fit).
+// Cells of one face's distance map, at most (the cell grows to fit).
 constexpr double kMaxCells = 1e6;
 // Two faces are parallel (or opposite) when their normals' dot product is
 // beyond this (about 11 degrees).
@@ -41,15 +42,22 @@ struct Rim {
   Vec3 normal = Vec3::UnitZ();  // the plane's outward normal
   Vec3 center = Vec3::Zero();   // on the plane
   double radius = 0.0;
-  double cell = 0.0;                  // the occupancy cell it was found with
+  double spacing = 0.0;               // of the face's points it was found among
   std::vector<std::uint32_t> points;  // the plane's inliers around the gap
 };
 
-// Median distance from one of `points` to its nearest other one (on at most
-// 2000 of them).
-double medianSpacing(const std::vector<Vec3>& points) {
-  if (points.size() < 2) return 0.0;
-  const NearestNeighbors nn(points);
+// The middle value (the upper one of an even count); `values` not empty.
+double upperMedian(std::vector<double> values) {
+  const auto middle = values.begin() + std::ptrdiff_t(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// Median distance from one of `points` to its nearest other one, on at most
+// 2000 of them; `nn` holds `points`. (The thresholds below were measured
+// with this estimate: estimateSpacing's, on 4000 points with the mean of
+// the two middle values, moves borderline rims either way.)
+double medianSpacing(const std::vector<Vec3>& points, const NearestNeighbors& nn) {
   const std::size_t step = std::max<std::size_t>(1, points.size() / 2000);
   std::vector<double> d;
   std::vector<std::uint32_t> near;
@@ -58,30 +66,7 @@ double medianSpacing(const std::vector<Vec3>& points) {
     nn.kNearest(points[i], 2, near, &d2);
     if (d2.size() == 2) d.push_back(std::sqrt(d2[1]));
   }
-  if (d.empty()) return 0.0;
-  std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
-  return d[d.size() / 2];
-}
-
-// Centre of the circle through 2D points, algebraic fit (Kasa): minimises
-// sum (|q|^2 + a x + b y + c)^2. False when the points do not fix it.
-bool circleCenter(const std::vector<Vec2>& q, Vec2& center) {
-  if (q.size() < 3) return false;
-  Vec2 mean = Vec2::Zero();
-  for (const Vec2& p : q) mean += p;
-  mean /= double(q.size());
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  for (const Vec2& p : q) {
-    const Vec2 d = p - mean;
-    const Eigen::Vector3d row(d.x(), d.y(), 1.0);
-    a += row * row.transpose();
-    rhs -= row * d.squaredNorm();
-  }
-  const Eigen::Vector3d x = a.ldlt().solve(rhs);
-  if (!x.allFinite()) return false;
-  center = mean + Vec2(-0.5 * x[0], -0.5 * x[1]);
-  return center.allFinite();
+  return d.empty() ? 0.0 : upperMedian(std::move(d));
 }
 
 // The round gaps among the inliers of the coplanar plane surfaces `group`
@@ -125,9 +110,9 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     lo = lo.cwiseMin(flat[k].head<2>());
     hi = hi.cwiseMax(flat[k].head<2>());
   }
-  const double spacing = medianSpacing(flat);
-  if (!(spacing > 0.0)) return;
   const NearestNeighbors nn(flat);
+  const double spacing = medianSpacing(flat, nn);
+  if (!(spacing > 0.0)) return;
   double cell = spacing;
   const Vec2 size = hi - lo;
   if ((size.x() / cell + 1.0) * (size.y() / cell + 1.0) > kMaxCells) {
@@ -137,8 +122,24 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
   const auto centre = [&](int x, int y) {
     return Vec2(lo.x() + (x + 0.5) * cell, lo.y() + (y + 0.5) * cell);
   };
-  // Distance from each cell's centre to the nearest point.
-  std::vector<double> empty(std::size_t(w) * std::size_t(h));
+  const auto cellOf = [&](const Vec2& p) {
+    const int x = std::clamp(int(std::floor((p.x() - lo.x()) / cell)), 0, w - 1);
+    const int y = std::clamp(int(std::floor((p.y() - lo.y()) / cell)), 0, h - 1);
+    return std::size_t(y) * std::size_t(w) + std::size_t(x);
+  };
+  // The points of each cell (compressed rows), and the distance from each
+  // cell's centre to the nearest point.
+  const std::size_t cells = std::size_t(w) * std::size_t(h);
+  std::vector<std::uint32_t> start(cells + 1, 0), members(flat.size());
+  for (const Vec3& p : flat) ++start[cellOf(p.head<2>()) + 1];
+  for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < flat.size(); ++k) {
+      members[fill[cellOf(flat[k].head<2>())]++] = std::uint32_t(k);
+    }
+  }
+  std::vector<double> empty(cells);
   {
     std::vector<std::uint32_t> near;
     std::vector<double> d2;
@@ -176,9 +177,8 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-    return a.radius > b.radius ||
-           (a.radius == b.radius && (a.center.x() < b.center.x() || (a.center.x() == b.center.x() &&
-                                                                     a.center.y() < b.center.y())));
+    return std::tuple(-a.radius, a.center.x(), a.center.y()) <
+           std::tuple(-b.radius, b.center.x(), b.center.y());
   });
   std::vector<Candidate> taken;
   std::vector<std::uint32_t> near;
@@ -189,25 +189,36 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
         })) {
       continue;
     }
-    // The points around the circle, then its centre fitted to them.
+    // The points around the circle (from the cells it reaches), then its
+    // centre fitted to them.
     const double reach = cand.radius * (1.0 + options.roundness) + 2.0 * spacing;
     std::vector<std::size_t> band;
-    for (std::size_t k = 0; k < flat.size(); ++k) {
-      if ((flat[k].head<2>() - cand.center).norm() <= reach) band.push_back(k);
+    std::vector<std::uint32_t> bandPoints;  // scan indices
+    const std::size_t c0 = cellOf(cand.center - Vec2::Constant(reach));
+    const std::size_t c1 = cellOf(cand.center + Vec2::Constant(reach));
+    for (std::size_t y = c0 / std::size_t(w); y <= c1 / std::size_t(w); ++y) {
+      for (std::size_t x = c0 % std::size_t(w); x <= c1 % std::size_t(w); ++x) {
+        const std::size_t c = y * std::size_t(w) + x;
+        for (std::uint32_t m = start[c]; m < start[c + 1]; ++m) {
+          if ((flat[members[m]].head<2>() - cand.center).norm() > reach) continue;
+          band.push_back(members[m]);
+          bandPoints.push_back(inliers[members[m]]);
+        }
+      }
     }
-    std::vector<Vec2> bq;
-    for (std::size_t k : band) bq.push_back(flat[k].head<2>());
+    const Vec3 origin = plane->offset * plane->normal + cand.center.x() * u + cand.center.y() * v;
     Vec2 center = cand.center;
-    if (Vec2 fitted; circleCenter(bq, fitted) &&
-                     (fitted - cand.center).norm() <= std::max(spacing, 0.25 * cand.radius)) {
-      center = fitted;
+    Vec3 fitted;
+    if (double r; surface_fit_detail::fitCircle(cloud, bandPoints, origin, u, v, fitted, r)) {
+      const Vec2 f(fitted.dot(u), fitted.dot(v));
+      if ((f - cand.center).norm() <= std::max(spacing, 0.25 * cand.radius)) center = f;
     }
     // The nearest point of each sector: a round hole's rim lies at its
     // radius all around, a slot's, a square's or a face's notch does not.
     std::array<double, kSectors> nearest;
     nearest.fill(std::numeric_limits<double>::infinity());
-    for (const Vec2& p : bq) {
-      const Vec2 d = p - center;
+    for (std::size_t k : band) {
+      const Vec2 d = flat[k].head<2>() - center;
       const double angle = std::atan2(d.y(), d.x()) + std::numbers::pi;
       const int sector = std::min(kSectors - 1, int(angle / (2.0 * std::numbers::pi) * kSectors));
       nearest[std::size_t(sector)] = std::min(nearest[std::size_t(sector)], d.norm());
@@ -232,9 +243,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
       nn.kNearest(flat[k], 2, near, &d2);
       if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
     }
-    if (gaps.empty()) continue;
-    std::nth_element(gaps.begin(), gaps.begin() + std::ptrdiff_t(gaps.size() / 2), gaps.end());
-    if (radius < options.minRadiusSpacings * gaps[gaps.size() / 2]) continue;
+    if (gaps.empty() || radius < options.minRadiusSpacings * upperMedian(std::move(gaps))) continue;
     taken.push_back({center, radius});
     ++stats.gaps;
     Rim r;
@@ -242,7 +251,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     r.normal = plane->normal;
     r.center = plane->offset * plane->normal + center.x() * u + center.y() * v;
     r.radius = radius;
-    r.cell = spacing;
+    r.spacing = spacing;
     r.points = std::move(ring);
     rims.push_back(std::move(r));
   }
@@ -254,7 +263,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
 bool explained(const DetectionResult& result, const Rim& rim) {
   constexpr int kSamples = 24;
   const Mat3 frame = frameFromAxis(rim.normal);
-  const double tolerance = 2.0 * result.epsilon + rim.cell;
+  const double tolerance = 2.0 * result.epsilon + rim.spacing;
   for (const Surface& surface : result.surfaces) {
     if (surface.as<PlaneSurface>()) continue;
     int near = 0;
@@ -350,8 +359,9 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
       for (std::size_t s = 0; s < found; ++s) {
         const auto* p = result.surfaces[s].as<PlaneSurface>();
         if (p == nullptr || s == ra.plane || p->normal.dot(n) < kParallel) continue;
+        // (Planes within two epsilon of the face are pieces of it.)
         const double below = ra.center.dot(p->normal) - p->offset;
-        if (below <= eps || (depth >= 0.0 && below >= depth)) continue;
+        if (below <= 2.0 * eps || (depth >= 0.0 && below >= depth)) continue;
         std::vector<std::uint32_t> inside;
         for (std::uint32_t i : result.surfaces[s].inliers) {
           if (lateral(cloud.points[i] - ra.center, n).norm() <= ra.radius) inside.push_back(i);
@@ -367,7 +377,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     // wall), and the points inside the hole, of which there should be none
     // between its ends: a gap where a small boss stands on the face (the
     // boss not detected) has the face under it, or the boss's own points.
-    const double band = std::max(eps, ra.cell);
+    const double band = std::max(eps, ra.spacing);
     const double deepest = depth >= 0.0 ? depth + eps : reach;
     std::vector<std::uint32_t> wall;
     double wallDepth = 0.0;

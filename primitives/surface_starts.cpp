@@ -13,12 +13,9 @@
 #include "primitives/surface_fit_internal.h"
 
 namespace csgvox {
-namespace {
 
-using namespace surface_fit_detail;
+namespace surface_fit_detail {
 
-// Kasa circle fit in the plane spanned by u, v through `origin`; false when
-// the points are collinear in that plane.
 bool fitCircle(const PointCloud& cloud, std::span<const std::uint32_t> indices, const Vec3& origin,
                const Vec3& u, const Vec3& v, Vec3& centre, double& radius) {
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
@@ -38,6 +35,12 @@ bool fitCircle(const PointCloud& cloud, std::span<const std::uint32_t> indices, 
   radius = std::sqrt(r2);
   return true;
 }
+
+}  // namespace surface_fit_detail
+
+namespace {
+
+using namespace surface_fit_detail;
 
 // Least-squares meeting point, in the plane through `origin` spanned by u and
 // v, of the points' normal lines projected into that plane: the axis of a

@@ -9,6 +9,9 @@
 #include <random>
 #include <vector>
 
+#include "io/scan_reader.h"
+#include "part_list.h"
+#include "pipeline/detect_and_fit.h"
 #include "primitives/rim_holes.h"
 
 namespace csgvox {
@@ -17,7 +20,7 @@ namespace {
 // A plate [-20, 20] x [-15, 15] x [-2, 2]; its faces sampled on a jittered
 // grid of `step`, without the points that `keep` refuses. Each face is one
 // plane surface of the result (the points assigned to it).
-struct Scan {
+struct FaceScan {
   PointCloud cloud;
   DetectionResult result;
 
@@ -82,7 +85,7 @@ std::function<bool(const Vec3&)> outside(std::vector<Hole> holes, double grow = 
 const auto anywhere = [](const Vec3&) { return true; };
 
 // The plate's four sides.
-void sides(Scan& scan, double step, std::mt19937& rng) {
+void sides(FaceScan& scan, double step, std::mt19937& rng) {
   scan.face(Vec3::UnitX(), 20.0, anywhere, Vec3(20, -15, -2), Vec3(20, 15, 2), step, rng);
   scan.face(-Vec3::UnitX(), 20.0, anywhere, Vec3(-20, -15, -2), Vec3(-20, 15, 2), step, rng);
   scan.face(Vec3::UnitY(), 15.0, anywhere, Vec3(-20, 15, -2), Vec3(20, 15, 2), step, rng);
@@ -102,7 +105,7 @@ TEST(RimHoles, ThroughHolesSeenOnlyFromTheirRimsBecomeCylindersThroughThePlate) 
   // the top and bottom faces show the same round gaps.
   std::mt19937 rng(3);
   const std::vector<Hole> holes{{-12, -7, 2}, {12, -7, 2}, {-12, 7, 2}, {12, 7, 2}};
-  Scan scan;
+  FaceScan scan;
   scan.face(Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
   scan.face(-Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
   sides(scan, 0.4, rng);
@@ -145,7 +148,7 @@ TEST(RimHoles, ABlindHoleEndsOnTheFloorSeenThroughIt) {
   // looking up) is seen through the gap; the bottom face has no gap.
   std::mt19937 rng(5);
   const Hole hole{0, 0, 3};
-  Scan scan;
+  FaceScan scan;
   scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
   scan.face(-Vec3::UnitZ(), 2.0, anywhere, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
   scan.face(
@@ -175,7 +178,7 @@ TEST(RimHoles, AHoleSeenFromOneSideGoesAsDeepAsItsWallPoints) {
   // only its top 2.5 of 4: the hole goes that deep, its wall points join it.
   std::mt19937 rng(7);
   const Hole hole{5, 0, 2};
-  Scan scan;
+  FaceScan scan;
   scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
   sides(scan, 0.4, rng);
   scan.wall(hole.x, hole.y, hole.r, -0.5, 2.0, 40, rng);
@@ -205,7 +208,7 @@ TEST(RimHoles, NothingIsInventedWhereTheScanShowsNoDepthOrTheGapIsNotRound) {
     return std::abs(p.x() - 8.0) > 4.0 || std::abs(p.y()) > 2.0;
   };
   const auto top = [&](const Vec3& p) { return outside({hole})(p) && square(p); };
-  Scan scan;
+  FaceScan scan;
   scan.face(Vec3::UnitZ(), 2.0, top, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
   scan.face(-Vec3::UnitZ(), 2.0, square, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
   sides(scan, 0.4, rng);
@@ -225,7 +228,7 @@ TEST(RimHoles, ASmallBossOnTheFaceIsNoHole) {
   // wall (their normals run along the axis) and they are inside the hole.
   std::mt19937 rng(17);
   const Hole boss{0, 0, 2};
-  Scan scan;
+  FaceScan scan;
   scan.face(Vec3::UnitZ(), 2.0, outside({boss}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
   scan.face(
       Vec3::UnitZ(), 4.0, [&](const Vec3& p) { return !outside({boss})(p); }, Vec3(-2, -2, 4),
@@ -255,7 +258,7 @@ TEST(RimHoles, AGapThatACurvedSurfaceExplainsIsLeftToIt) {
   // nothing.
   std::mt19937 rng(13);
   const Hole hole{0, 0, 2.5};
-  Scan scan;
+  FaceScan scan;
   scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
   scan.face(-Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
   Surface wall;
@@ -269,6 +272,34 @@ TEST(RimHoles, AGapThatACurvedSurfaceExplainsIsLeftToIt) {
   EXPECT_EQ(stats.explained, 2u);
   EXPECT_EQ(stats.holes, 0u);
   EXPECT_EQ(scan.result.surfaces.size(), before);
+}
+
+TEST(RimHoles, TheMainJobFindsAHoleOfTheCountersunkPlateFromItsRimInItsScannerScan) {
+  // The bundled scanner scan of the countersunk plate (raw x y z): the
+  // scanner barely sees the walls of its small holes; a rim gives one.
+  // Without the rims, the same scan has that many concave cylinders along
+  // the plate's normal (z) fewer.
+  const Scan scan = readScan(test::dataDir() / "countersunk_plate" / "scan_scanner.ply");
+  ASSERT_TRUE(scan.info.normalsEstimated);
+  DetectAndFitOptions options;
+  options.detect.estimatedNormals = true;
+  const auto holesAlongZ = [](const SurfacesAndCandidates& found) {
+    std::size_t n = 0;
+    for (const Surface& s : found.detection.surfaces) {
+      const auto* c = s.as<CylinderSurface>();
+      n += c != nullptr && !s.convex && std::abs(c->axisDir.z()) > 0.99 ? 1 : 0;
+    }
+    return n;
+  };
+  const SurfacesAndCandidates with = detectAndFit(scan.cloud, options);
+  ASSERT_TRUE(with.ok()) << with.detection.message;
+  EXPECT_GE(with.rimHoles.holes, 1u);
+  EXPECT_NE(with.detection.message.find("found from their rims"), std::string::npos);
+  options.rimHoles = false;
+  const SurfacesAndCandidates without = detectAndFit(scan.cloud, options);
+  ASSERT_TRUE(without.ok());
+  EXPECT_EQ(without.rimHoles.holes, 0u);
+  EXPECT_EQ(holesAlongZ(with), holesAlongZ(without) + with.rimHoles.holes);
 }
 
 }  // namespace

@@ -32,7 +32,7 @@ const std::vector<KnownGap> kKnownGaps = {
      "IoU 0.727: visibility still turns part of the bore and its spherical seat inward (3.5 % "
      "of the normals), the tree fills the bore"},
     {"countersunk_plate", 0.91,
-     "IoU 0.970, 8 of 12 primitives (two holes found from their rims; 0.967 and 7 without)"},
+     "IoU 0.970, 8 of 12 primitives (one hole found from its rim; 0.967 and 7 without)"},
     {"housing_complex", 0.89,
      "IoU 0.945, 13 of 17 primitives (two holes found from their rims; 0.927 and 11 "
      "without); the rest not yet analysed"},
