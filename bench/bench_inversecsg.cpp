@@ -92,8 +92,8 @@
 #include "core/named_values.h"
 #include "core/set_operations.h"
 #include "core/statistics.h"
-#include "io/point_arrays.h"
 #include "io/mesh_files.h"
+#include "io/point_arrays.h"
 #include "io/point_writer.h"
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
@@ -114,8 +114,8 @@ struct Options {
   int resolution = 64;
   bool finerGrid = true;
   bool unsupportedRegions = true;
-  std::size_t repairSearches = 0;  // 0: the default
-  std::size_t repairStall = 0;     // 0: the default
+  std::size_t repairSearches = 0;                    // 0: the default
+  std::size_t repairStall = 0;                       // 0: the default
   std::optional<SetOperationKind> repairOperations;  // none: the default
   bool finish = false;
   std::uint64_t seed = 1;
@@ -132,7 +132,9 @@ struct Options {
 // How a model's scan is made.
 enum class ScanKind { Uniform, Scanner };
 
-const char* scanKindName(ScanKind kind) { return kind == ScanKind::Uniform ? "uniform" : "scanner"; }
+const char* scanKindName(ScanKind kind) {
+  return kind == ScanKind::Uniform ? "uniform" : "scanner";
+}
 
 // One line of inversecsg-results.csv.
 struct Reference {
@@ -305,6 +307,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     if (rec.holesFromRims > 0) {
       res.note += ", " + std::to_string(rec.holesFromRims) + " holes from their rims";
     }
+    if (rec.boreOpening.voxels > 0) {
+      res.note += ", " + std::to_string(rec.boreOpening.voxels) + " voxels opened in bores";
+    }
     if (rec.timeLimitHit) res.note += " (time limit hit)";
     if (!rec.ok()) return res;
     if (!keep.empty()) writeTreeJson(keep / "tree.json", rec.tree);
@@ -470,7 +475,8 @@ std::vector<std::string> splitList(const std::string& s) {
 
 int usage(const char* argv0) {
   std::fprintf(stderr,
-               "usage: %s DIR [--points N] [--noise F] [--estimate-normals] [--res R] [--models 011,039,...] "
+               "usage: %s DIR [--points N] [--noise F] [--estimate-normals] [--res R] [--models "
+               "011,039,...] "
                "[--samples S] [--time-limit T] [--method hybrid|voxel|gp] [--no-finer-grid] "
                "[--no-unsupported-regions] [--finish] [--repair-searches K] "
                "[--repair-stall S] [--repair-operations minmax|sardf|rfunction] [--seed S] "
@@ -507,8 +513,8 @@ bool parseArguments(int argc, char** argv, Options& opt) {
       opt.repairStall = std::size_t(std::max(1, std::atoi(argv[++i])));
     } else if (arg == "--repair-operations" && hasValue) {
       try {
-        opt.repairOperations = valueNamed<SetOperationKind>(kSetOperationNames, argv[++i],
-                                                            "--repair-operations");
+        opt.repairOperations =
+            valueNamed<SetOperationKind>(kSetOperationNames, argv[++i], "--repair-operations");
       } catch (const std::invalid_argument& e) {
         std::fprintf(stderr, "%s\n", e.what());
         return false;
@@ -594,9 +600,9 @@ void printHeading(const Options& opt) {
     std::printf("hybrid searches per region: %zu, stall: %zu generations (0: the default)\n",
                 opt.repairSearches, opt.repairStall);
   if (opt.repairOperations)
-    std::printf("hybrid repair operations: %s\n",
-                std::string(nameOf<SetOperationKind>(kSetOperationNames, *opt.repairOperations))
-                    .c_str());
+    std::printf(
+        "hybrid repair operations: %s\n",
+        std::string(nameOf<SetOperationKind>(kSetOperationNames, *opt.repairOperations)).c_str());
   std::printf(
       "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
@@ -609,9 +615,8 @@ void printHeading(const Options& opt) {
 // A model's row of the table: our result next to InverseCSG's `r`.
 void printRow(const std::string& model, ScanKind kind, const Reference& r, const Result& res) {
   std::printf("%-6s %-7s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), scanKindName(kind),
-              r.faces,
-              res.status.c_str(), res.seconds, res.primitives, r.primitives, res.operations,
-              r.operations);
+              r.faces, res.status.c_str(), res.seconds, res.primitives, r.primitives,
+              res.operations, r.operations);
   if (res.iou >= 0.0) {
     std::printf("%7.4f", res.iou);
   } else {

@@ -88,6 +88,8 @@ Json voxelCounts(const Reconstruction& rec, const Construction& c) {
   const ConstructStats& st = c.stats;
   return {{"surfaces", rec.detection.surfaces.size()},
           {"holes_from_rims", rec.holesFromRims},
+          {"bores_seen", rec.boreOpening.bores},
+          {"bore_voxels_opened", rec.boreOpening.voxels},
           {"hypotheses", rec.hypotheses.candidates.size()},
           {"usable_roots", st.usableRoots},
           {"truncation_roots", st.truncationRoots},

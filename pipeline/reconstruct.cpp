@@ -259,8 +259,21 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   lo.noise = out.detection.noise;
   lo.control = control;
   out.labels = labelVoxels(out.grid, scan, lo);
-  clock.finish("voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
-               " inside (" + std::string(labelMethodName(options.labels.method)) + ")");
+  if (!control.cancelled()) {
+    out.boreOpening =
+        openSeenBores(out.grid, scan, out.detection.surfaces, out.labels.inside, options.bores);
+  }
+  const BoreOpening& bores = out.boreOpening;
+  clock.finish(
+      "voxels " + dimsText(out.grid) + ", " + std::to_string(out.labels.inside.count()) +
+      " inside (" + std::string(labelMethodName(options.labels.method)) + ")" +
+      (bores.voxels == 0
+           ? std::string()
+           : "; " + std::to_string(bores.voxels) + " opened in " + std::to_string(bores.bores) +
+                 " bore" + (bores.bores == 1 ? "" : "s") + " seen around their axis" +
+                 (bores.extended == 0
+                      ? std::string()
+                      : ", " + std::to_string(bores.extended) + " extended into another's")));
   if (control.cancelled()) return cancelledAfter(std::move(out), "labels");
 
   if (options.method == Method::Gp) {

@@ -28,6 +28,7 @@
 #include "primitives/surface_detection.h"
 #include "voxel/description_sets.h"
 #include "voxel/labeling.h"
+#include "voxel/seen_bores.h"
 #include "voxel/voxel_grid.h"
 
 namespace csgvox {
@@ -63,6 +64,7 @@ struct ReconstructOptions {
   std::uint64_t seed = 1;      ///< seeds detection and hypotheses; same seed, same tree
   DetectOptions detect;        ///< surface detection (its seed is replaced by `seed`)
   LabelOptions labels;         ///< voxel labelling
+  BoreOpeningOptions bores;    ///< labels completed by the bores seen (voxel/seen_bores.h)
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
   HybridOptions hybrid;        ///< hybrid method: the repair search (its seed is set from `seed`)
   FinishOptions finish;        ///< hybrid method: the parameter fit last (its fitness is set from
@@ -148,6 +150,7 @@ struct Reconstruction {
   int resolution = 0;             ///< the grid's (finer than asked when the part is thin)
   std::vector<ThinFeature> thin;  ///< features thinner than two voxels at the asked resolution
   std::size_t holesFromRims = 0;  ///< hole cylinders found from their rims (raw scans)
+  BoreOpening boreOpening;        ///< inside labels turned outside in the bores seen
   VoxelLabels labels;
   Method method = Method::Voxel;   ///< the method asked for
   MethodResult result;             ///< the method's own result (monostate when none ran)

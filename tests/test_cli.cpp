@@ -144,6 +144,23 @@ TEST_F(Cli, MainJobWritesTheTreeItsExportsAndAReport) {
   EXPECT_EQ(slurp(out / "tree.json"), first);
 }
 
+TEST_F(Cli, MainJobOpensTheBoresOfAScannerScan) {
+  // The pipe tee's scanner scan sees its bores near their mouths: the labels
+  // line and report.json say how many voxels their completion opened (the
+  // tree's IoU is tested in test_scanner_scans).
+  const RunResult r = run("'" + (test::dataDir() / "pipe_tee" / "scan_scanner.ply").string() +
+                              "' --no-preview -o '" + (dir_ / "out").string() + "'",
+                          dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(dir_ / "out" / "report.json"));
+  const long opened = j["counts"]["bore_voxels_opened"].get<long>();
+  EXPECT_EQ(j["counts"]["bores_seen"].get<int>(), 2);
+  EXPECT_GT(opened, 3000);
+  EXPECT_NE(r.err.find("; " + std::to_string(opened) + " opened in 2 bores seen around their axis"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST_F(Cli, MainJobRefusesAScanWithoutSurfaces) {
   // Points scattered through a cube with scattered normals: no plane,
   // cylinder, cone, sphere or torus explains them.

@@ -1,0 +1,219 @@
+// Labels completed by the bores the detection saw (voxel/seen_bores.h): a
+// bore seen near its ends is opened along its length, a branch seen near its
+// mouth is opened into the run's bore, and nothing is opened where points
+// show material across a bore or where the scan does not show how deep a
+// hole goes.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <random>
+
+#include "voxel/seen_bores.h"
+
+namespace csgvox {
+namespace {
+
+// Voxels of 1 mm over [-20, 20] x [-20, 20] x [-40, 40].
+VoxelGrid testGrid() { return VoxelGrid(Vec3(-20, -20, -40), Mat3::Identity(), 1.0, {40, 40, 80}); }
+
+VoxelSet labelsWhere(const VoxelGrid& grid, const std::function<bool(const Vec3&)>& in) {
+  VoxelSet set(grid.voxelCount());
+  for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
+    if (in(grid.center(v))) set.set(v);
+  }
+  return set;
+}
+
+struct Scene {
+  PointCloud cloud;
+  std::vector<Surface> surfaces;
+  std::mt19937 rng{7};
+
+  // `count` points on the wall of radius r about the axis through `point`
+  // along the unit `axis`, between depths t0 and t1, over the angles
+  // [0, sweep); with `asSurface` they are the inliers of a concave (hole)
+  // cylinder, else loose points with outward normals (a boss).
+  void wall(const Vec3& point, const Vec3& axis, double r, double t0, double t1, int count,
+            bool asSurface, double sweep = 2.0 * std::numbers::pi) {
+    const Mat3 f = frameFromAxis(axis);
+    std::uniform_real_distribution<double> angle(0.0, sweep), depth(t0, t1);
+    Surface s;
+    s.shape = CylinderSurface{point, axis, r};
+    s.convex = !asSurface;
+    for (int k = 0; k < count; ++k) {
+      const double a = angle(rng);
+      const Vec3 radial = std::cos(a) * f.col(0) + std::sin(a) * f.col(1);
+      s.inliers.push_back(std::uint32_t(cloud.size()));
+      cloud.points.push_back(point + depth(rng) * axis + r * radial);
+      cloud.normals.push_back(asSurface ? Vec3(-radial) : radial);
+    }
+    if (asSurface) surfaces.push_back(std::move(s));
+  }
+
+  // `count` points on the disc of radius r about `centre`, normal n.
+  void disc(const Vec3& centre, const Vec3& n, double r, int count) {
+    const Mat3 f = frameFromAxis(n);
+    std::uniform_real_distribution<double> u(-r, r);
+    for (int k = 0; k < count;) {
+      const double a = u(rng), b = u(rng);
+      if (a * a + b * b > r * r) continue;
+      cloud.points.push_back(centre + a * f.col(0) + b * f.col(1));
+      cloud.normals.push_back(n);
+      ++k;
+    }
+  }
+};
+
+TEST(SeenBores, ABoreSeenNearItsEndsIsOpenedAlongItsLength) {
+  const VoxelGrid grid = testGrid();
+  // A pipe along z: outer radius 15, bore 8, z in [-30, 30]; the labels fill
+  // the bore (its wall unseen between z = -22 and 22).
+  const auto solid = [](const Vec3& p) {
+    return std::abs(p.z()) < 30.0 && p.head<2>().norm() < 15.0;
+  };
+  VoxelSet inside = labelsWhere(grid, solid);
+  Scene scene;
+  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 8.0, -30.0, -22.0, 600, true);
+  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 8.0, 22.0, 30.0, 600, true);
+  // The same wall as one surface, and a few stray points in the bore.
+  scene.surfaces[0].inliers.insert(scene.surfaces[0].inliers.end(),
+                                   scene.surfaces[1].inliers.begin(),
+                                   scene.surfaces[1].inliers.end());
+  scene.surfaces.pop_back();
+  scene.disc(Vec3(0, 0, 5), Vec3::UnitZ(), 5.0, 3);
+
+  const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
+  EXPECT_EQ(done.bores, 1u);
+  EXPECT_EQ(done.extended, 0u);
+  // Voxels half a voxel in from the wall and farther are opened (nearer it,
+  // the winding number decides).
+  std::size_t wrongIn = 0, wrongOut = 0;
+  for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
+    const Vec3 c = grid.center(v);
+    const double rho = c.head<2>().norm();
+    if (rho > 7.5 && rho < 8.0) continue;
+    const bool truth = solid(c) && rho > 8.0;
+    wrongIn += !truth && inside.test(v);
+    wrongOut += truth && !inside.test(v);
+  }
+  EXPECT_EQ(wrongOut, 0u);
+  // The bore's voxels are outside along the whole pipe (its inliers span
+  // z = -30 to 30 to within their sampling).
+  EXPECT_LT(wrongIn, 60u);
+  EXPECT_GT(done.voxels, 8000u);  // ~ pi 7.5^2 x 58 = 10 250 voxels
+}
+
+TEST(SeenBores, ABossStandingInARoundPocketStaysInside) {
+  const VoxelGrid grid = testGrid();
+  // A round pocket of radius 10, z in [0, 10], with a boss of radius 4
+  // standing in it; the labels wrongly fill the pocket around the boss.
+  VoxelSet inside = labelsWhere(grid, [](const Vec3& p) { return p.z() < 10.0 && p.z() > -20; });
+  Scene scene;
+  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 10.0, 0.0, 10.0, 1500, true);
+  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 4.0, 0.0, 10.0, 600, false);
+  const VoxelSet before = inside;
+  const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
+  EXPECT_EQ(done.bores, 1u);
+  EXPECT_EQ(done.voxels, 0u);
+  EXPECT_EQ(inside, before);
+}
+
+TEST(SeenBores, AHoleWhoseDepthIsNotSeenEndsWhereItWasSeen) {
+  const VoxelGrid grid = testGrid();
+  // A block z in [-30, 30]; a hole of radius 6 seen from its mouth at
+  // z = 30 down to z = 20, its floor unseen. Past z = 20 nothing shows
+  // whether the hole goes on; the outside below the block is no evidence.
+  VoxelSet inside = labelsWhere(grid, [](const Vec3& p) { return std::abs(p.z()) < 30.0; });
+  Scene scene;
+  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 6.0, 20.0, 30.0, 800, true);
+  const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
+  EXPECT_EQ(done.bores, 1u);
+  EXPECT_EQ(done.extended, 0u);
+  for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
+    const Vec3 c = grid.center(v);
+    if (c.head<2>().norm() >= 5.5 || std::abs(c.z()) > 30.0) continue;
+    if (c.z() > 20.5) {
+      EXPECT_FALSE(inside.test(v)) << c.transpose();
+    } else if (c.z() < 19.5) {
+      EXPECT_TRUE(inside.test(v)) << c.transpose();
+    }
+  }
+}
+
+// A tee: a run bore of radius 8 along x (seen near both ends) and a branch
+// bore of radius 5 along z from the top, seen only near its mouth.
+struct Tee {
+  VoxelGrid grid = testGrid();
+  Scene scene;
+  VoxelSet inside;
+  static bool solid(const Vec3& p) {
+    const bool run = std::abs(p.x()) < 19.0 && p.tail<2>().norm() < 12.0;
+    const bool branch = p.z() > 0.0 && p.z() < 30.0 && p.head<2>().norm() < 9.0;
+    return run || branch;
+  }
+  Tee() {
+    inside = labelsWhere(grid, solid);
+    scene.wall(Vec3::Zero(), Vec3::UnitX(), 8.0, -19.0, -13.0, 500, true);
+    scene.wall(Vec3::Zero(), Vec3::UnitX(), 8.0, 13.0, 19.0, 500, true);
+    scene.surfaces[0].inliers.insert(scene.surfaces[0].inliers.end(),
+                                     scene.surfaces[1].inliers.begin(),
+                                     scene.surfaces[1].inliers.end());
+    scene.surfaces.pop_back();
+    scene.wall(Vec3::Zero(), Vec3::UnitZ(), 5.0, 22.0, 30.0, 500, true);
+  }
+};
+
+TEST(SeenBores, ABranchSeenNearItsMouthIsOpenedIntoTheRunsBore) {
+  Tee tee;
+  const BoreOpening done = openSeenBores(tee.grid, tee.scene.cloud, tee.scene.surfaces, tee.inside);
+  EXPECT_EQ(done.bores, 2u);
+  EXPECT_EQ(done.extended, 1u);
+  for (std::size_t v = 0; v < tee.grid.voxelCount(); ++v) {
+    const Vec3 c = tee.grid.center(v);
+    // The branch between the run's bore and where it was seen.
+    if (c.head<2>().norm() < 4.5 && c.z() > 9.0 && c.z() < 21.0) {
+      EXPECT_FALSE(tee.inside.test(v)) << c.transpose();
+    }
+    // The run's wall beside the branch stays.
+    if (c.head<2>().norm() > 5.5 && c.tail<2>().norm() > 8.5 && Tee::solid(c)) {
+      EXPECT_TRUE(tee.inside.test(v)) << c.transpose();
+    }
+  }
+}
+
+TEST(SeenBores, AFloorSeenInTheBranchStopsIt) {
+  Tee tee;
+  // A floor across the branch at z = 15, sampled as densely as its wall.
+  tee.scene.disc(Vec3(0, 0, 15), Vec3::UnitZ(), 5.0, 150);
+  const BoreOpening done = openSeenBores(tee.grid, tee.scene.cloud, tee.scene.surfaces, tee.inside);
+  EXPECT_EQ(done.extended, 0u);
+  for (std::size_t v = 0; v < tee.grid.voxelCount(); ++v) {
+    const Vec3 c = tee.grid.center(v);
+    if (c.head<2>().norm() < 4.5 && c.z() > 12.5 && c.z() < 14.5) {
+      EXPECT_TRUE(tee.inside.test(v)) << c.transpose();
+    }
+  }
+}
+
+TEST(SeenBores, OnlyConcaveCylindersSeenAllAroundCount) {
+  const VoxelGrid grid = testGrid();
+  VoxelSet inside = labelsWhere(grid, [](const Vec3& p) { return std::abs(p.z()) < 30.0; });
+  Scene scene;
+  // Half a concave cylinder (a slot's end) and a convex one (a boss).
+  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 8.0, -10.0, 10.0, 800, true, std::numbers::pi);
+  scene.wall(Vec3(10, 10, 0), Vec3::UnitZ(), 5.0, -10.0, 10.0, 800, true);
+  scene.surfaces.back().convex = true;
+  const VoxelSet before = inside;
+  BoreOpeningOptions off;
+  off.enabled = false;
+  EXPECT_EQ(openSeenBores(grid, scene.cloud, scene.surfaces, inside, off).voxels, 0u);
+  const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
+  EXPECT_EQ(done.bores, 0u);
+  EXPECT_EQ(inside, before);
+}
+
+}  // namespace
+}  // namespace csgvox

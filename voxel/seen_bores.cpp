@@ -1,0 +1,205 @@
+#include "voxel/seen_bores.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace csgvox {
+
+namespace {
+
+constexpr int kSectors = 12;
+
+// A concave cylinder seen all around its axis, and what lies inside it.
+struct Bore {
+  Vec3 point;                  // on the axis
+  Vec3 axis;                   // unit
+  double radius;               // scan units
+  double lo, hi;               // span of the inliers along the axis, from `point`
+  double density;              // inliers per unit area of the wall seen
+  double interior;             // radius within which points are material across the bore
+  std::vector<double> depths;  // sorted axial positions of the points within `interior`
+};
+
+// The bore of a surface, or false when it is none: a concave cylinder at
+// least two voxels in radius with inliers in minSectors of the 12 sectors
+// around its axis.
+bool boreOf(const Surface& s, const PointCloud& scan, double voxel, const BoreOpeningOptions& o,
+            Bore& out) {
+  const auto* c = s.as<CylinderSurface>();
+  if (c == nullptr || s.convex || s.inliers.empty() || c->radius < 2.0 * voxel) return false;
+  const Vec3 axis = c->axisDir.normalized();
+  const Mat3 frame = frameFromAxis(axis);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  unsigned sectors = 0;
+  for (std::uint32_t i : s.inliers) {
+    const Vec3 d = scan.points[i] - c->axisPoint;
+    const double t = d.dot(axis);
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+    const double angle = std::atan2(d.dot(frame.col(1)), d.dot(frame.col(0)));
+    const int k = std::clamp(int((angle + std::numbers::pi) / (2.0 * std::numbers::pi) * kSectors),
+                             0, kSectors - 1);
+    sectors |= 1u << k;
+  }
+  if (std::popcount(sectors) < o.minSectors || !(hi > lo)) return false;
+  out.point = c->axisPoint;
+  out.axis = axis;
+  out.radius = c->radius;
+  out.lo = lo;
+  out.hi = hi;
+  out.density = double(s.inliers.size()) / (2.0 * std::numbers::pi * c->radius * (hi - lo));
+  out.interior = c->radius - voxel;
+  out.depths.clear();
+  for (const Vec3& p : scan.points) {
+    const Vec3 d = p - out.point;
+    const double t = d.dot(axis);
+    if ((d - t * axis).squaredNorm() < out.interior * out.interior) out.depths.push_back(t);
+  }
+  std::sort(out.depths.begin(), out.depths.end());
+  return true;
+}
+
+class BoreOpener {
+ public:
+  BoreOpener(const VoxelGrid& grid, VoxelSet& inside, const BoreOpeningOptions& o)
+      : grid_(grid), inside_(inside), opened_(grid.voxelCount()), o_(o), h_(grid.voxelSize()) {}
+
+  // Material across the bore in the slab one voxel thick about depth t:
+  // points inside its disc (a floor, a boss standing in a round pocket) as
+  // many as a share of the bore wall's own points in such a slab.
+  bool closed(const Bore& b, double t) const {
+    const auto first = std::lower_bound(b.depths.begin(), b.depths.end(), t - 0.5 * h_);
+    const auto last = std::lower_bound(first, b.depths.end(), t + 0.5 * h_);
+    const double wall = b.density * 2.0 * std::numbers::pi * b.radius * h_;
+    return double(last - first) >= std::max(double(o_.minMaterialPoints), o_.materialShare * wall);
+  }
+
+  // Opens the stretch of the bore between depths t0 < t1: inside voxels
+  // whose centres lie in it, half a voxel in from its wall, become outside
+  // (a radius found from a rim can be a fraction of a voxel too large; the
+  // winding number decides next to the wall, where the points are).
+  std::size_t open(const Bore& b, double t0, double t1) {
+    const double open2 = (b.radius - 0.5 * h_) * (b.radius - 0.5 * h_);
+    const std::array<int, 3>& dims = grid_.dims();
+    int lo[3], hi[3];
+    const Vec3 g0 = toGrid(b.point + t0 * b.axis), g1 = toGrid(b.point + t1 * b.axis);
+    const double pad = b.radius / h_ + 1.0;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, int(std::floor(std::min(g0[a], g1[a]) - pad)));
+      hi[a] = std::min(dims[a], int(std::ceil(std::max(g0[a], g1[a]) + pad)) + 1);
+    }
+    std::size_t n = 0;
+    for (int k = lo[2]; k < hi[2]; ++k) {
+      for (int j = lo[1]; j < hi[1]; ++j) {
+        for (int i = lo[0]; i < hi[0]; ++i) {
+          const std::size_t v = grid_.index(i, j, k);
+          if (!inside_.test(v)) continue;
+          const Vec3 d = grid_.center(i, j, k) - b.point;
+          const double t = d.dot(b.axis);
+          if (t < t0 || t > t1 || (d - t * b.axis).squaredNorm() >= open2) continue;
+          inside_.reset(v);
+          opened_.set(v);
+          ++n;
+        }
+      }
+    }
+    return n;
+  }
+
+  // Along the stretch the inliers span, every run of open slabs.
+  std::size_t openSeen(const Bore& b) {
+    std::size_t n = 0;
+    const double step = 0.5 * h_;
+    double runStart = 0.0;
+    bool inRun = false;
+    for (double t = b.lo;; t += step) {
+      const bool last = t >= b.hi;
+      const double at = std::min(t, b.hi);
+      const bool isOpen = !closed(b, at);
+      if (isOpen && !inRun) runStart = at, inRun = true;
+      if (inRun && (!isOpen || last)) {
+        const double end = isOpen ? at : at - step;
+        if (end >= runStart) {
+          n += open(b, std::max(b.lo, runStart - 0.5 * step), std::min(b.hi, end + 0.5 * step));
+        }
+        inRun = false;
+      }
+      if (last) break;
+    }
+    return n;
+  }
+
+  // Past the end at depth `end` in direction dir (+1 or -1): through
+  // voxels that no floor closes, into a bore's air (another bore opened by
+  // openSeen: the outside beyond the part is no evidence, since the face a
+  // part stood on may be unseen). Returns the voxels opened (0 when the
+  // extension meets a floor or leaves the grid first).
+  std::size_t extend(const Bore& b, double end, int dir, bool& reached) {
+    reached = false;
+    const Mat3 frame = frameFromAxis(b.axis);
+    for (double t = end + 0.5 * dir * h_;; t += 0.5 * dir * h_) {
+      if (closed(b, t)) return 0;
+      std::size_t total = 0, air = 0;
+      const Vec3 centre = b.point + t * b.axis;
+      for (double u = -b.interior; u <= b.interior; u += 0.5 * h_) {
+        for (double w = -b.interior; w <= b.interior; w += 0.5 * h_) {
+          if (u * u + w * w > b.interior * b.interior) continue;
+          const Vec3 g = toGrid(centre + u * frame.col(0) + w * frame.col(1));
+          const int i = int(std::floor(g.x())), j = int(std::floor(g.y())),
+                    k = int(std::floor(g.z()));
+          if (i < 0 || j < 0 || k < 0 || i >= grid_.dims()[0] || j >= grid_.dims()[1] ||
+              k >= grid_.dims()[2]) {
+            continue;
+          }
+          ++total;
+          air += opened_.test(grid_.index(i, j, k)) ? 1 : 0;
+        }
+      }
+      if (total == 0) return 0;  // out of the grid: no air met
+      if (double(air) >= o_.airShare * double(total)) {
+        reached = true;
+        return open(b, std::min(end, t), std::max(end, t));
+      }
+    }
+  }
+
+ private:
+  Vec3 toGrid(const Vec3& p) const { return grid_.axes().transpose() * (p - grid_.origin()) / h_; }
+
+  const VoxelGrid& grid_;
+  VoxelSet& inside_;
+  VoxelSet opened_;  // voxels openSeen turned to outside
+  const BoreOpeningOptions& o_;
+  double h_;
+};
+
+}  // namespace
+
+BoreOpening openSeenBores(const VoxelGrid& grid, const PointCloud& scan,
+                          std::span<const Surface> surfaces, VoxelSet& inside,
+                          const BoreOpeningOptions& options) {
+  BoreOpening out;
+  if (!options.enabled || grid.voxelCount() == 0) return out;
+  std::vector<Bore> bores;
+  for (const Surface& s : surfaces) {
+    Bore b;
+    if (boreOf(s, scan, grid.voxelSize(), options, b)) bores.push_back(std::move(b));
+  }
+  out.bores = bores.size();
+  BoreOpener opener(grid, inside, options);
+  // Every seen stretch first, so an extension can reach another bore's air.
+  for (const Bore& b : bores) out.voxels += opener.openSeen(b);
+  for (const Bore& b : bores) {
+    for (int dir : {-1, 1}) {
+      bool reached = false;
+      out.voxels += opener.extend(b, dir < 0 ? b.lo : b.hi, dir, reached);
+      out.extended += reached ? 1 : 0;
+    }
+  }
+  return out;
+}
+
+}  // namespace csgvox
