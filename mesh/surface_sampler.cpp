@@ -25,13 +25,14 @@ double uniform(Rng& rng) { return std::uniform_real_distribution<double>(0.0, 1.
 // uniformly; points off the primitive's surface are rejected like every
 // point off the solid's boundary, so the density stays uniform.
 struct Piece {
-  enum class Kind { Parallelogram, CylinderSide, SphereCap } kind = Kind::Parallelogram;
+  enum class Kind { Parallelogram, CylinderSide, ConeSide, SphereCap } kind = Kind::Parallelogram;
   double area = 0.0;
   Vec3 origin = Vec3::Zero(), u = Vec3::Zero(), v = Vec3::Zero();  // origin + s u + t v
-  Mat3 frame = Mat3::Identity();  // cylinder / sphere cap: third axis = axis or cap direction
-  double radius = 0.0;
-  double angle0 = 0.0, angle1 = 0.0;    // cylinder side: angles in the frame's first two axes
-  double height0 = 0.0, height1 = 0.0;  // cylinder side: along the axis, from origin
+  Mat3 frame = Mat3::Identity();        // cylinder / sphere cap: third axis = axis or cap direction
+  double radius = 0.0;                  // cylinder side, sphere cap; cone side: at height0
+  double radius1 = 0.0;                 // cone side: the radius at height1
+  double angle0 = 0.0, angle1 = 0.0;    // cylinder, cone side: angles in the frame's first two axes
+  double height0 = 0.0, height1 = 0.0;  // cylinder, cone side: along the axis, from origin
   double cosCap = -1.0;                 // sphere cap: cosine of its angular radius
 };
 
@@ -74,6 +75,16 @@ void addClippedFace(std::vector<Piece>& pieces, const Window& w, const Vec3& cen
                std::max(-hb, qb - w.radius), std::min(hb, qb + w.radius));
 }
 
+// Half the angle of a circle of radius r about an axis at distance d from the
+// window's centre (measured across the axis) that can lie within the
+// window; pi when all of it can, a negative number when none can.
+double halfAngleNear(double r, double d, double windowRadius) {
+  if (!(d > 0.0) || !(r > 0.0)) return std::numbers::pi;
+  const double cosHalf = (r * r + d * d - windowRadius * windowRadius) / (2.0 * r * d);
+  if (cosHalf > 1.0) return -1.0;
+  return cosHalf > -1.0 ? std::acos(cosHalf) : std::numbers::pi;
+}
+
 std::vector<Piece> piecesNear(const Primitive& prim, const Window& w) {
   std::vector<Piece> pieces;
   if (const auto* b = prim.as<Box>()) {
@@ -97,15 +108,7 @@ std::vector<Piece> piecesNear(const Primitive& prim, const Window& w) {
     const double t = q.dot(c->axis);
     const Vec3 radial = q - t * c->axis;
     const double d = radial.norm();
-    double half = std::numbers::pi;
-    if (d > 0.0) {
-      const double cosHalf =
-          (c->radius * c->radius + d * d - w.radius * w.radius) / (2.0 * c->radius * d);
-      if (cosHalf > 1.0)
-        half = -1.0;  // the side does not reach the window
-      else if (cosHalf > -1.0)
-        half = std::acos(cosHalf);
-    }
+    const double half = halfAngleNear(c->radius, d, w.radius);
     const double h0 = std::max(-0.5 * c->height, t - w.radius);
     const double h1 = std::min(0.5 * c->height, t + w.radius);
     if (half > 0.0 && h1 > h0) {
@@ -121,6 +124,51 @@ std::vector<Piece> piecesNear(const Primitive& prim, const Window& w) {
       p.height1 = h1;
       p.area = c->radius * 2.0 * half * (h1 - h0);
       pieces.push_back(p);
+    }
+  } else if (const auto* cone = prim.as<Cone>()) {
+    const Mat3 f = frameFromAxis(cone->axis);
+    const double H = cone->height;
+    addClippedFace(pieces, w, cone->center - 0.5 * H * cone->axis, f.col(0), f.col(1), cone->axis,
+                   cone->radiusBottom, cone->radiusBottom);
+    addClippedFace(pieces, w, cone->center + 0.5 * H * cone->axis, f.col(0), f.col(1), cone->axis,
+                   cone->radiusTop, cone->radiusTop);
+    const Vec3 q = w.center - cone->center;
+    const double t = q.dot(cone->axis);
+    const Vec3 radial = q - t * cone->axis;
+    const double d = radial.norm();
+    const double h0 = std::max(-0.5 * H, t - w.radius);
+    const double h1 = std::min(0.5 * H, t + w.radius);
+    const auto radiusAt = [&](double h) {
+      return cone->radiusBottom + (cone->radiusTop - cone->radiusBottom) * (h / H + 0.5);
+    };
+    if (h1 > h0) {
+      const double r0 = radiusAt(h0), r1 = radiusAt(h1);
+      // The widest angle over the radii between r0 and r1: at either end
+      // or where r^2 = d^2 - w^2 (the circle tangent to the window).
+      double half = std::max(halfAngleNear(r0, d, w.radius), halfAngleNear(r1, d, w.radius));
+      const double tangent2 = d * d - w.radius * w.radius;
+      if (tangent2 > 0.0) {
+        const double rt = std::sqrt(tangent2);
+        if (rt > std::min(r0, r1) && rt < std::max(r0, r1)) {
+          half = std::max(half, halfAngleNear(rt, d, w.radius));
+        }
+      }
+      if (half > 0.0) {
+        Piece p;
+        p.kind = Piece::Kind::ConeSide;
+        p.origin = cone->center;
+        p.frame = f;
+        p.radius = r0;
+        p.radius1 = r1;
+        const double phi = std::atan2(radial.dot(f.col(1)), radial.dot(f.col(0)));
+        p.angle0 = phi - half;
+        p.angle1 = phi + half;
+        p.height0 = h0;
+        p.height1 = h1;
+        const double slope = (r1 - r0) / (h1 - h0);
+        p.area = 2.0 * half * 0.5 * (r0 + r1) * (h1 - h0) * std::sqrt(1.0 + slope * slope);
+        if (p.area > 0.0) pieces.push_back(p);
+      }
     }
   } else if (const auto* sp = prim.as<Sphere>()) {
     const Vec3 q = w.center - sp->center;
@@ -158,7 +206,7 @@ SurfaceDomain makeDomain(const Primitive& p, const Aabb& bounds) {
       if (d.area < 0.5 * p.surfaceArea()) return d;
       d.pieces.clear();
       d.area = 0.0;
-    } else if (p.as<Box>() || p.as<Cylinder>() || p.as<Sphere>()) {
+    } else if (p.as<Box>() || p.as<Cylinder>() || p.as<Cone>() || p.as<Sphere>()) {
       return d;  // its surface does not reach the solid
     }
   }
@@ -201,6 +249,20 @@ Vec3 samplePiece(const Piece& p, Rng& rng) {
       const double a = p.angle0 + (p.angle1 - p.angle0) * uniform(rng);
       const double t = p.height0 + (p.height1 - p.height0) * uniform(rng);
       return p.origin + p.radius * (std::cos(a) * p.frame.col(0) + std::sin(a) * p.frame.col(1)) +
+             t * p.frame.col(2);
+    }
+    case Piece::Kind::ConeSide: {
+      // The area at height t grows as the radius: the radius's square is
+      // uniform between the ends'.
+      const double a = p.angle0 + (p.angle1 - p.angle0) * uniform(rng);
+      const double r0 = p.radius, r1 = p.radius1;
+      double t = p.height0 + (p.height1 - p.height0) * uniform(rng);
+      if (std::abs(r1 - r0) > 1e-12 * std::max(r0, r1)) {
+        const double r = std::sqrt(r0 * r0 + (r1 * r1 - r0 * r0) * uniform(rng));
+        t = p.height0 + (r - r0) / (r1 - r0) * (p.height1 - p.height0);
+      }
+      const double r = r0 + (r1 - r0) * (t - p.height0) / (p.height1 - p.height0);
+      return p.origin + r * (std::cos(a) * p.frame.col(0) + std::sin(a) * p.frame.col(1)) +
              t * p.frame.col(2);
     }
     case Piece::Kind::SphereCap: {

@@ -206,5 +206,32 @@ TEST(SurfaceSampler, PrimitivesMuchWiderThanThePartAreSampledNearIt) {
   EXPECT_NEAR(s.surfaceArea, 256.0, 256.0 * 0.05);
 }
 
+// The same for a cone (a nearly flat face fitted as a frustum of radius ~955
+// whose apex lies thousands of units away, as on a scanner scan of the
+// bundled rotated_block: `eval` of the job's own tree gave up with "no
+// boundary to sample").
+TEST(SurfaceSampler, ConesMuchWiderThanThePartAreSampledNearIt) {
+  const double r = 955.0;
+  // The cone's axis along z, its side passing through x = 3 at z = 0,
+  // tilted by its radii 955 -> 956 over the height 20.
+  const CsgTree tree = CsgTree::subtract(
+      {CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(5, 5, 5)}),
+       CsgTree::leaf(Cone{Vec3(3.0 - r - 0.5, 0, 0), Vec3::UnitZ(), r, r + 1.0, 20.0})});
+  SampleOptions o;
+  o.points = 20000;
+  const SurfaceSample s = sampleSurface(tree, o);
+  ASSERT_EQ(s.cloud.size(), o.points);
+  const double d = tree.bounds().diagonal();
+  std::size_t onCone = 0;
+  for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+    EXPECT_LT(std::abs(tree.value(s.cloud.points[i])), 1e-9 * d);
+    onCone += s.source[i] == 1;
+  }
+  // The solid is about x in [3, 5] (the cone's side at x = 3 +- 0.25):
+  // the cone's face about 10 x 10 of a boundary of about 2 x 100 + 4 x 20.
+  EXPECT_NEAR(double(onCone) / double(o.points), 100.0 / 280.0, 0.02);
+  EXPECT_NEAR(s.surfaceArea, 280.0, 280.0 * 0.05);
+}
+
 }  // namespace
 }  // namespace csgvox
