@@ -32,6 +32,10 @@ const std::vector<KnownGap> kKnownGaps = {
      "IoU 0.717: visibility still turns part of the bore and its spherical seat inward (3.5 % "
      "of the normals), the tree fills the bore (0.727 before the bolt holes' labels were "
      "opened: the optimisation then chose other members)"},
+    {"countersunk_plate", 0.91,
+     "IoU 0.970 (0.9699), 8 of 12 primitives (one hole found from its rim; 0.967 and 7 "
+     "without); its holes' walls are seen all around, so no bore is opened (0.9717 when the seen "
+     "stretches were opened too)"},
     {"housing_complex", 0.89,
      "IoU 0.945, 13 of 17 primitives (two holes found from their rims; 0.927 and 11 "
      "without); the rest not yet analysed"},

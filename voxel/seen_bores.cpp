@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 namespace csgvox {
@@ -21,6 +22,7 @@ struct Bore {
   double density;              // inliers per unit area of the wall seen
   double interior;             // radius within which points are material across the bore
   std::vector<double> depths;  // sorted axial positions of the points within `interior`
+  std::vector<std::pair<double, unsigned>> wall;  // the inliers' depths and sector bits, sorted
 };
 
 // The bore of a surface, or false when it is none: a concave cylinder at
@@ -34,6 +36,7 @@ bool boreOf(const Surface& s, const PointCloud& scan, double voxel, const BoreOp
   const Mat3 frame = frameFromAxis(axis);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   unsigned sectors = 0;
+  out.wall.clear();
   for (std::uint32_t i : s.inliers) {
     const Vec3 d = scan.points[i] - c->axisPoint;
     const double t = d.dot(axis);
@@ -43,7 +46,9 @@ bool boreOf(const Surface& s, const PointCloud& scan, double voxel, const BoreOp
     const int k = std::clamp(int((angle + std::numbers::pi) / (2.0 * std::numbers::pi) * kSectors),
                              0, kSectors - 1);
     sectors |= 1u << k;
+    out.wall.emplace_back(t, 1u << k);
   }
+  std::sort(out.wall.begin(), out.wall.end());
   if (std::popcount(sectors) < o.minSectors || !(hi > lo)) return false;
   out.point = c->axisPoint;
   out.axis = axis;
@@ -75,6 +80,19 @@ class BoreOpener {
     const auto last = std::lower_bound(first, b.depths.end(), t + 0.5 * h_);
     const double wall = b.density * 2.0 * std::numbers::pi * b.radius * h_;
     return double(last - first) >= std::max(double(o_.minMaterialPoints), o_.materialShare * wall);
+  }
+
+  // The wall seen all around in the slab one voxel thick about depth t:
+  // there the winding number of the points is reliable and the labels are
+  // left alone.
+  bool wallSeen(const Bore& b, double t) const {
+    const auto first = std::lower_bound(b.wall.begin(), b.wall.end(),
+                                        std::pair<double, unsigned>(t - 0.5 * h_, 0u));
+    unsigned sectors = 0;
+    for (auto it = first; it != b.wall.end() && it->first < t + 0.5 * h_; ++it) {
+      sectors |= it->second;
+    }
+    return std::popcount(sectors) >= o_.minSectors;
   }
 
   // Opens the stretch of the bore between depths t0 < t1: inside voxels
@@ -110,7 +128,8 @@ class BoreOpener {
     return n;
   }
 
-  // Along the stretch the inliers span, every run of open slabs.
+  // Along the stretch the inliers span, every run of slabs whose wall was
+  // not seen all around and that no points close.
   std::size_t openSeen(const Bore& b) {
     std::size_t n = 0;
     const double step = 0.5 * h_;
@@ -119,7 +138,7 @@ class BoreOpener {
     for (double t = b.lo;; t += step) {
       const bool last = t >= b.hi;
       const double at = std::min(t, b.hi);
-      const bool isOpen = !closed(b, at);
+      const bool isOpen = !wallSeen(b, at) && !closed(b, at);
       if (isOpen && !inRun) runStart = at, inRun = true;
       if (inRun && (!isOpen || last)) {
         const double end = isOpen ? at : at - step;

@@ -4,11 +4,12 @@
 /// points then reads 0.5 to 0.85 along the unseen middle, and the labels fill
 /// the bore. A concave cylinder whose inliers lie all around its axis is a
 /// bore or a hole: along the stretch its inliers span, its inside is air
-/// wherever no points show material across it (a floor, a boss standing in
-/// a round pocket). Past either end it is extended through a plug of inside
-/// labels that no floor closes, when the extension reaches air (a branch's
-/// bore into the run's, seen only near its mouth); otherwise it ends where
-/// it was seen, so a hole whose depth the scan does not show invents none.
+/// wherever its wall was not seen all around (where it was, the winding
+/// number is reliable and the labels stay) and no points show material
+/// across it (a floor, a boss standing in a round pocket). Past either end it is extended through a
+/// plug of inside labels that no floor closes, when the extension reaches air (a branch's bore into
+/// the run's, seen only near its mouth); otherwise it ends where it was seen, so a hole whose depth
+/// the scan does not show invents none.
 
 #include <cstddef>
 #include <span>
@@ -23,7 +24,9 @@ namespace csgvox {
 /// Options of openSeenBores.
 struct BoreOpeningOptions {
   bool enabled = true;  ///< false leaves the labels as the points give them
-  int minSectors = 10;  ///< of 12 sectors around the axis, those that must hold inliers (count)
+  /// Of 12 sectors around the axis, those that must hold inliers for a bore,
+  /// and in a slab one voxel thick for its wall to count as seen there (count).
+  int minSectors = 10;
   /// A slab of the bore, one voxel thick, is closed (material across it)
   /// when the points inside its disc number at least this share of the bore
   /// wall's own points in a slab (ratio) ...
