@@ -53,6 +53,15 @@ struct Scene {
     if (asSurface) surfaces.push_back(std::move(s));
   }
 
+  // The last two walls' inliers as one surface (one wall seen in two
+  // stretches).
+  void joinLastTwo() {
+    Surface last = std::move(surfaces.back());
+    surfaces.pop_back();
+    std::vector<std::uint32_t>& into = surfaces.back().inliers;
+    into.insert(into.end(), last.inliers.begin(), last.inliers.end());
+  }
+
   // `count` points on the disc of radius r about `centre`, normal n.
   void disc(const Vec3& centre, const Vec3& n, double r, int count) {
     const Mat3 f = frameFromAxis(n);
@@ -82,10 +91,7 @@ TEST(SeenBores, ABoreSeenNearItsEndsIsOpenedAlongItsLength) {
   scene.wall(Vec3::Zero(), Vec3::UnitZ(), 8.0, -30.0, -22.0, 600, true);
   scene.wall(Vec3::Zero(), Vec3::UnitZ(), 8.0, 22.0, 30.0, 600, true);
   // The same wall as one surface, and a few stray points in the bore.
-  scene.surfaces[0].inliers.insert(scene.surfaces[0].inliers.end(),
-                                   scene.surfaces[1].inliers.begin(),
-                                   scene.surfaces[1].inliers.end());
-  scene.surfaces.pop_back();
+  scene.joinLastTwo();
   scene.disc(Vec3(0, 0, 5), Vec3::UnitZ(), 5.0, 3);
 
   const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
@@ -133,10 +139,7 @@ TEST(SeenBores, ABossStandingInARoundPocketStaysInside) {
   Scene scene;
   scene.wall(Vec3::Zero(), Vec3::UnitZ(), 10.0, 0.0, 0.5, 100, true);
   scene.wall(Vec3::Zero(), Vec3::UnitZ(), 10.0, 7.0, 10.0, 500, true);
-  scene.surfaces[0].inliers.insert(scene.surfaces[0].inliers.end(),
-                                   scene.surfaces[1].inliers.begin(),
-                                   scene.surfaces[1].inliers.end());
-  scene.surfaces.pop_back();
+  scene.joinLastTwo();
   scene.wall(Vec3::Zero(), Vec3::UnitZ(), 4.0, 0.0, 10.0, 600, false);
   const VoxelSet before = inside;
   const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
@@ -186,10 +189,7 @@ struct Tee {
     inside = labelsWhere(grid, solid);
     scene.wall(Vec3::Zero(), Vec3::UnitX(), 8.0, -19.0, -13.0, 500, true);
     scene.wall(Vec3::Zero(), Vec3::UnitX(), 8.0, 13.0, 19.0, 500, true);
-    scene.surfaces[0].inliers.insert(scene.surfaces[0].inliers.end(),
-                                     scene.surfaces[1].inliers.begin(),
-                                     scene.surfaces[1].inliers.end());
-    scene.surfaces.pop_back();
+    scene.joinLastTwo();
     scene.wall(Vec3::Zero(), Vec3::UnitZ(), 5.0, 22.0, 30.0, 500, true);
   }
 };
