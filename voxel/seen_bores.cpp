@@ -1,6 +1,7 @@
 #include "voxel/seen_bores.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <numbers>
@@ -102,14 +103,13 @@ class BoreOpener {
   // the pipe tee's scanner scan, 7 primitives for 4 with a quarter voxel.)
   std::size_t open(const Bore& b, double t0, double t1) {
     const double open2 = b.radius * b.radius;
-    const std::array<int, 3>& dims = grid_.dims();
-    int lo[3], hi[3];
-    const Vec3 g0 = toGrid(b.point + t0 * b.axis), g1 = toGrid(b.point + t1 * b.axis);
-    const double pad = b.radius / h_ + 1.0;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, int(std::floor(std::min(g0[a], g1[a]) - pad)));
-      hi[a] = std::min(dims[a], int(std::ceil(std::max(g0[a], g1[a]) + pad)) + 1);
-    }
+    Aabb box;
+    box.extend(b.point + t0 * b.axis);
+    box.extend(b.point + t1 * b.axis);
+    box.min.array() -= b.radius;
+    box.max.array() += b.radius;
+    std::array<int, 3> lo, hi;
+    grid_.voxelRange(box, lo, hi);
     std::size_t n = 0;
     for (int k = lo[2]; k < hi[2]; ++k) {
       for (int j = lo[1]; j < hi[1]; ++j) {
@@ -167,7 +167,7 @@ class BoreOpener {
       for (double u = -b.interior; u <= b.interior; u += 0.5 * h_) {
         for (double w = -b.interior; w <= b.interior; w += 0.5 * h_) {
           if (u * u + w * w > b.interior * b.interior) continue;
-          const Vec3 g = toGrid(centre + u * frame.col(0) + w * frame.col(1));
+          const Vec3 g = grid_.toGrid(centre + u * frame.col(0) + w * frame.col(1));
           const int i = int(std::floor(g.x())), j = int(std::floor(g.y())),
                     k = int(std::floor(g.z()));
           if (i < 0 || j < 0 || k < 0 || i >= grid_.dims()[0] || j >= grid_.dims()[1] ||
@@ -187,8 +187,6 @@ class BoreOpener {
   }
 
  private:
-  Vec3 toGrid(const Vec3& p) const { return grid_.axes().transpose() * (p - grid_.origin()) / h_; }
-
   const VoxelGrid& grid_;
   VoxelSet& inside_;
   VoxelSet opened_;  // voxels openSeen turned to outside
