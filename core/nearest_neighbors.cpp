@@ -1,12 +1,63 @@
 #include "core/nearest_neighbors.h"
 
+#include <algorithm>
+#include <cmath>
 #include <nanoflann.hpp>
+#include <numeric>
 
 namespace csgvox {
+namespace {
+
+// Bits of each coordinate in a Morton key (3 x 21 = 63 bits).
+constexpr int kMortonBits = 21;
+
+// The low 21 bits of x spread to every third bit.
+std::uint64_t spreadBits(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> spatialOrder(std::span<const Vec3> points) {
+  const std::size_t n = points.size();
+  Aabb box;
+  for (const Vec3& p : points) {
+    if (p.allFinite()) box.extend(p);
+  }
+  const double top = double((std::uint64_t{1} << kMortonBits) - 1);
+  Vec3 scale = Vec3::Zero();
+  if (!box.isEmpty()) {
+    for (int a = 0; a < 3; ++a) {
+      const double extent = box.max[a] - box.min[a];
+      scale[a] = extent > 0.0 ? top / extent : 0.0;
+    }
+  }
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t key = 0;
+    if (points[i].allFinite() && !box.isEmpty()) {
+      for (int a = 0; a < 3; ++a) {
+        const double c = std::clamp((points[i][a] - box.min[a]) * scale[a], 0.0, top);
+        key |= spreadBits(std::uint64_t(c)) << a;
+      }
+    }
+    keyed[i] = {key, std::uint32_t(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t j = 0; j < n; ++j) order[j] = keyed[j].second;
+  return order;
+}
 
 struct NearestNeighbors::Impl {
   struct Adaptor {
-    std::vector<Vec3> points;
+    std::vector<Vec3> points;  // in `order`
     std::size_t kdtree_get_point_count() const { return points.size(); }
     double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i][int(dim)]; }
     template <class Box>
@@ -17,11 +68,14 @@ struct NearestNeighbors::Impl {
   using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>,
                                                    Adaptor, 3, std::uint32_t>;
   Adaptor data;
+  std::vector<std::uint32_t> order;  // position in `data` -> index as passed
   std::unique_ptr<Tree> tree;
 };
 
 NearestNeighbors::NearestNeighbors(std::span<const Vec3> points) : impl_(std::make_unique<Impl>()) {
-  impl_->data.points.assign(points.begin(), points.end());
+  impl_->order = spatialOrder(points);
+  impl_->data.points.resize(points.size());
+  for (std::size_t j = 0; j < points.size(); ++j) impl_->data.points[j] = points[impl_->order[j]];
   impl_->tree =
       std::make_unique<Impl::Tree>(3, impl_->data, nanoflann::KDTreeSingleIndexAdaptorParams(16));
 }
@@ -32,6 +86,8 @@ NearestNeighbors& NearestNeighbors::operator=(NearestNeighbors&&) noexcept = def
 
 std::size_t NearestNeighbors::size() const { return impl_->data.points.size(); }
 
+std::span<const std::uint32_t> NearestNeighbors::order() const { return impl_->order; }
+
 std::uint32_t NearestNeighbors::nearest(const Vec3& q, double* squaredDistance) const {
   std::uint32_t index = 0;
   double d2 = 0.0;
@@ -39,7 +95,7 @@ std::uint32_t NearestNeighbors::nearest(const Vec3& q, double* squaredDistance) 
   result.init(&index, &d2);
   impl_->tree->findNeighbors(result, q.data(), nanoflann::SearchParams());
   if (squaredDistance) *squaredDistance = d2;
-  return index;
+  return impl_->order[index];
 }
 
 void NearestNeighbors::kNearest(const Vec3& q, std::size_t k, std::vector<std::uint32_t>& indices,
@@ -53,8 +109,19 @@ void NearestNeighbors::kNearest(const Vec3& q, std::size_t k, std::vector<std::u
   nanoflann::KNNResultSet<double, std::uint32_t> result(k);
   result.init(indices.data(), d2.data());
   impl_->tree->findNeighbors(result, q.data(), nanoflann::SearchParams());
-  indices.resize(result.size());
-  d2.resize(result.size());
+  const std::size_t found = result.size();
+  indices.resize(found);
+  d2.resize(found);
+  for (std::uint32_t& i : indices) i = impl_->order[i];
+  // Points at one distance (copies of a point) by index, whatever the
+  // order the tree visited them in.
+  for (std::size_t a = 0; a < found;) {
+    std::size_t b = a + 1;
+    while (b < found && d2[b] == d2[a]) ++b;
+    if (b - a > 1)
+      std::sort(indices.begin() + std::ptrdiff_t(a), indices.begin() + std::ptrdiff_t(b));
+    a = b;
+  }
 }
 
 }  // namespace csgvox

@@ -60,9 +60,13 @@ FitMetrics evaluateFit(const CsgTree& tree, const PointCloud& scan, const FitOpt
   const NearestNeighbors surfaceIndex(sp);
   const std::vector<const Node*> leaves = tree.leaves();
 
+  const NearestNeighbors scanIndex(scan.points);
+
+  // Both loops visit their points in space order (cache-friendly queries).
   const std::size_t n = scan.size();
   std::vector<double> eq9(n), dist(n), cosine(n, 0.0);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t at) {
+    const std::size_t k = scanIndex.order()[at];
     const Vec3& p = scan.points[k];
     double best = std::numeric_limits<double>::infinity();
     for (const Node* leaf : leaves) best = std::min(best, std::abs(leaf->primitive.value(p)));
@@ -74,9 +78,9 @@ FitMetrics evaluateFit(const CsgTree& tree, const PointCloud& scan, const FitOpt
 
   // Boundary samples to the scan, for the other half of the Chamfer distance.
   const double scanSpacing = std::sqrt(surface.surfaceArea / double(n));
-  const NearestNeighbors scanIndex(scan.points);
   std::vector<double> back(sp.size());
-  tbb::parallel_for(std::size_t(0), sp.size(), [&](std::size_t k) {
+  tbb::parallel_for(std::size_t(0), sp.size(), [&](std::size_t at) {
+    const std::size_t k = surfaceIndex.order()[at];
     back[k] = surfaceDistance(sp[k], scanIndex, scan.points, scan.normals, scanSpacing, nullptr);
   });
 

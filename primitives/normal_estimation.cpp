@@ -140,7 +140,8 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
     std::vector<std::uint32_t> hood;
     std::vector<double> d2;
     std::vector<Point3> local;
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+    for (std::size_t at = range.begin(); at != range.end(); ++at) {
+      const std::size_t i = nn.order()[at];  // neighbours visited together: cache-friendly
       nn.kNearest(points[i], k + 1, hood, &d2);  // (never short: n > k)
       // Distinct points: the point itself is the only one at distance 0.
       std::iter_swap(hood.begin(), std::find(hood.begin(), hood.end(), std::uint32_t(i)));

@@ -38,7 +38,8 @@ Local localMeasures(std::span<const Vec3> points, unsigned k) {
   local.spacing.resize(n);
   local.offPlane.resize(n);
   local.planeRms.resize(n);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t at) {
+    const std::size_t i = tree.order()[at];  // neighbours visited together: cache-friendly
     thread_local std::vector<std::uint32_t> found;
     thread_local std::vector<double> d2;
     tree.kNearest(points[i], k + 1, found, &d2);

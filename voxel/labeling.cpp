@@ -173,7 +173,8 @@ std::vector<double> pointAreas(const PointCloud& scan, int k, double noise) {
         // Whether the last point needed its tangent disc: on a noisy scan
         // nearly all do, and the wide query then also gives the ball.
         bool wide = false;
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        for (std::size_t at = r.begin(); at != r.end(); ++at) {
+          const std::size_t i = index.order()[at];  // neighbours together: cache-friendly
           index.kNearest(scan.points[i], wide ? kk : std::min(want + 1, scan.size()), near, &d2);
           const std::size_t m = std::min(want, near.size() - 1);
           const double ball = m > 0 ? std::numbers::pi * d2[m] / double(m) : 0.0;

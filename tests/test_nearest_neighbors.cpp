@@ -1,0 +1,90 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "core/nearest_neighbors.h"
+
+namespace csgvox {
+namespace {
+
+std::vector<Vec3> randomPoints(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  std::vector<Vec3> p(n);
+  for (Vec3& q : p) q = Vec3(u(rng), u(rng), 0.2 * u(rng));
+  return p;
+}
+
+// The k nearest by brute force: by distance, then by index.
+std::vector<std::uint32_t> bruteForce(const std::vector<Vec3>& p, const Vec3& q, std::size_t k) {
+  std::vector<std::uint32_t> idx(p.size());
+  std::iota(idx.begin(), idx.end(), 0u);
+  std::stable_sort(idx.begin(), idx.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return (p[a] - q).squaredNorm() < (p[b] - q).squaredNorm();
+  });
+  idx.resize(std::min(k, p.size()));
+  return idx;
+}
+
+TEST(NearestNeighbors, KNearestEqualsBruteForceWithIndicesAsPassed) {
+  const std::vector<Vec3> p = randomPoints(3000, 7);
+  const NearestNeighbors nn(p);
+  std::vector<std::uint32_t> found;
+  std::vector<double> d2;
+  for (const Vec3& q : randomPoints(200, 8)) {
+    nn.kNearest(q, 12, found, &d2);
+    EXPECT_EQ(found, bruteForce(p, q, 12));
+    ASSERT_EQ(d2.size(), 12u);
+    for (std::size_t j = 0; j < found.size(); ++j) {
+      EXPECT_DOUBLE_EQ(d2[j], (p[found[j]] - q).squaredNorm());
+    }
+    double nd2 = -1.0;
+    EXPECT_EQ(nn.nearest(q, &nd2), bruteForce(p, q, 1).front());
+    EXPECT_DOUBLE_EQ(nd2, d2.front());
+  }
+}
+
+TEST(NearestNeighbors, CopiesOfAPointComeByIndex) {
+  std::vector<Vec3> p = randomPoints(500, 3);
+  // Five copies of one point, spread over the index range.
+  for (std::uint32_t i : {40u, 410u, 7u, 250u}) p[i] = p[123];
+  const NearestNeighbors nn(p);
+  std::vector<std::uint32_t> found;
+  nn.kNearest(p[123], 5, found);
+  EXPECT_EQ(found, (std::vector<std::uint32_t>{7, 40, 123, 250, 410}));
+}
+
+TEST(NearestNeighbors, OrderIsAPermutationThatKeepsNeighboursTogether) {
+  const std::vector<Vec3> p = randomPoints(20000, 11);
+  const NearestNeighbors nn(p);
+  const std::span<const std::uint32_t> order = nn.order();
+  std::vector<std::uint32_t> sorted(order.begin(), order.end());
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<std::uint32_t> all(p.size());
+  std::iota(all.begin(), all.end(), 0u);
+  EXPECT_EQ(sorted, all);
+  EXPECT_EQ(std::vector<std::uint32_t>(order.begin(), order.end()), spatialOrder(p));
+  // Consecutive points of the order lie far closer together than
+  // consecutive points of the random input.
+  double inOrder = 0.0, asPassed = 0.0;
+  for (std::size_t j = 1; j < p.size(); ++j) {
+    inOrder += (p[order[j]] - p[order[j - 1]]).norm();
+    asPassed += (p[j] - p[j - 1]).norm();
+  }
+  EXPECT_LT(inOrder, 0.1 * asPassed);
+}
+
+TEST(NearestNeighbors, SpatialOrderHandlesFlatAndDegenerateSets) {
+  EXPECT_TRUE(spatialOrder({}).empty());
+  const std::vector<Vec3> same(4, Vec3(1.0, 2.0, 3.0));
+  EXPECT_EQ(spatialOrder(same), (std::vector<std::uint32_t>{0, 1, 2, 3}));
+  // A line along x: the order is by x.
+  const std::vector<Vec3> line = {Vec3(3, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(0, 0, 0)};
+  EXPECT_EQ(spatialOrder(line), (std::vector<std::uint32_t>{3, 1, 2, 0}));
+}
+
+}  // namespace
+}  // namespace csgvox
