@@ -67,6 +67,26 @@ TEST(MinimalBoxFrame, SameSeedSameFrameAndSearchOnASubset) {
   }
 }
 
+// Large sets are searched on the points that may be corners of their convex
+// hull: what is dropped changes nothing. 60 000 points inside a box whose
+// corners are the only hull corners give the frame of the 8 corners alone
+// (searched without the filter), with the corners anywhere in the input.
+TEST(MinimalBoxFrame, ALargeSetGivesTheFrameOfItsHullCorners) {
+  Rng rng(9);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Mat3 rotation = test::randomRotation(rng);
+    const Vec3 centre(5, -3, 8), half(6, 2.5, 1);
+    std::vector<Vec3> points = boxPoints(rotation, centre, half, 60000, rng);
+    const std::vector<Vec3> corners(points.end() - 8, points.end());
+    // Move the corners to scattered places in the input.
+    for (int c = 0; c < 8; ++c) {
+      std::swap(points[points.size() - 8 + std::size_t(c)],
+                points[std::size_t(977 * c + 13 * trial + 5)]);
+    }
+    EXPECT_EQ(minimalBoxFrame(points, {3, 0}), minimalBoxFrame(corners, {3, 0})) << trial;
+  }
+}
+
 TEST(MinimalBoxFrame, FlatAndTinySetsTakeTheirPrincipalAxes) {
   // Points on the plane z = 1 (a rectangle 4 x 1): CGAL's search needs a
   // solid hull, so the frame is the principal one, the normal last.
