@@ -63,11 +63,13 @@ std::vector<K::Point_3> hullCandidates(const std::vector<K::Point_3>& points) {
   const double count = double(inner.number_of_vertices());
   const K::Point_3 centre(cx / count, cy / count, cz / count);
   // Per face: its corners, the side its inside is on, and its outward plane
-  // n.x = c in doubles, moved inward well beyond their rounding.
+  // n.x = c in doubles, with a margin far above their rounding: a point
+  // farther than it from the plane is on the side the doubles say, and the
+  // exact predicate decides the points within it.
   struct Face {
     K::Point_3 a, b, c;
     CGAL::Orientation inside;
-    double nx, ny, nz, deepInside;
+    double nx, ny, nz, offset, margin;
   };
   std::vector<Face> faces;
   for (const auto f : inner.faces()) {
@@ -77,14 +79,15 @@ std::vector<K::Point_3> hullCandidates(const std::vector<K::Point_3>& points) {
       if (k < 3) v[k] = inner.point(inner.target(h));
       ++k;
     }
-    Face face{v[0], v[1], v[2], CGAL::orientation(v[0], v[1], v[2], centre), 0, 0, 0, 0};
+    Face face{v[0], v[1], v[2], CGAL::orientation(v[0], v[1], v[2], centre), 0, 0, 0, 0, 0};
     if (face.inside == CGAL::COPLANAR) return points;
     K::Vector_3 n = CGAL::cross_product(v[1] - v[0], v[2] - v[0]);
     const double length = std::sqrt(n.squared_length());
     if (!(length > 0.0)) return points;
     if (n * (centre - v[0]) > 0.0) n = -n;  // outward
     face.nx = n.x(), face.ny = n.y(), face.nz = n.z();
-    face.deepInside = n * (v[0] - CGAL::ORIGIN) - 1e-9 * length * std::max(extent, 1e-300);
+    face.offset = n * (v[0] - CGAL::ORIGIN);
+    face.margin = 1e-9 * length * std::max(extent, 1e-300);
     faces.push_back(face);
   }
   std::vector<unsigned char> keep(points.size(), 0);
@@ -94,14 +97,13 @@ std::vector<K::Point_3> hullCandidates(const std::vector<K::Point_3>& points) {
       keep[i] = 1;
       return;
     }
-    const bool deep = std::all_of(faces.begin(), faces.end(), [&](const Face& q) {
-      return q.nx * p.x() + q.ny * p.y() + q.nz * p.z() < q.deepInside;
+    // Kept when outside some face's plane (on it or inside all: dropped).
+    keep[i] = std::any_of(faces.begin(), faces.end(), [&](const Face& q) {
+      const double t = q.nx * p.x() + q.ny * p.y() + q.nz * p.z() - q.offset;
+      if (t < -q.margin) return false;
+      if (t > q.margin) return true;
+      return CGAL::orientation(q.a, q.b, q.c, p) == -q.inside;
     });
-    if (deep) return;
-    const bool closed = std::all_of(faces.begin(), faces.end(), [&](const Face& q) {
-      return CGAL::orientation(q.a, q.b, q.c, p) != -q.inside;
-    });
-    keep[i] = !closed;
   });
   std::vector<K::Point_3> kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
