@@ -2,8 +2,7 @@
 // robust least squares of a surface on its inliers, and the per-point fit
 // measures that assignment uses.
 
-#include <ceres/cost_function.h>
-#include <ceres/jet.h>
+#include <ceres/autodiff_cost_function.h>
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
@@ -16,7 +15,6 @@
 #include <memory>
 #include <numbers>
 #include <stdexcept>
-#include <utility>
 #include <variant>
 #include <vector>
 
@@ -255,101 +253,6 @@ Vec3 convexNormal(const Surface& surface, const Vec3& p) {
   return Vec3::UnitZ();
 }
 
-// Every point's residuals of one fit in a single Ceres residual block, with
-// the robust loss applied point by point exactly as Ceres applies it to a
-// block of its own: a point with squared residual norm s and loss values
-// rho(s), rho'(s) contributes residuals and Jacobian rows scaled by
-// sqrt(rho'(s)) (the Huber loss has rho'' <= 0, so Ceres's correction has
-// no second-order term), and one last residual carries the rest of the
-// cost, sqrt(sum of rho(s) - rho'(s) s), with a zero Jacobian row. The cost,
-// gradient and Gauss-Newton model are thus those of one block per point,
-// without Ceres's bookkeeping for thousands of blocks, which took most of
-// the time of a fit. Derivatives by forward-mode automatic
-// differentiation (Ceres's Jet) of the same residual functors.
-template <class Residual, int... Sizes>
-class PointsCost final : public ceres::CostFunction {
- public:
-  static constexpr int kParameters = (Sizes + ...);
-
-  PointsCost(std::vector<Residual> points, const ceres::LossFunction& loss)
-      : points_(std::move(points)), loss_(loss) {
-    set_num_residuals(int(3 * points_.size() + 1));
-    (mutable_parameter_block_sizes()->push_back(Sizes), ...);
-  }
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    constexpr std::array<int, sizeof...(Sizes)> sizes{Sizes...};
-    bool anyJacobian = false;
-    if (jacobians) {
-      for (std::size_t b = 0; b < sizes.size(); ++b) anyJacobian |= jacobians[b] != nullptr;
-    }
-    double rest = 0.0;
-    if (!anyJacobian) {
-      for (std::size_t i = 0; i < points_.size(); ++i) {
-        double r[3];
-        if (!call(points_[i], parameters, r, std::make_index_sequence<sizeof...(Sizes)>())) {
-          return false;
-        }
-        rest += correct(r, residuals + 3 * i, nullptr);
-      }
-    } else {
-      using Jet = ceres::Jet<double, kParameters>;
-      std::array<std::array<Jet, 3>, sizeof...(Sizes)> x;
-      const Jet* jetBlocks[sizeof...(Sizes)];
-      for (std::size_t b = 0, at = 0; b < sizes.size(); at += std::size_t(sizes[b]), ++b) {
-        for (int k = 0; k < sizes[b]; ++k)
-          x[b][std::size_t(k)] = Jet(parameters[b][k], int(at) + k);
-        jetBlocks[b] = x[b].data();
-      }
-      for (std::size_t i = 0; i < points_.size(); ++i) {
-        Jet r[3];
-        if (!call(points_[i], jetBlocks, r, std::make_index_sequence<sizeof...(Sizes)>())) {
-          return false;
-        }
-        double value[3] = {r[0].a, r[1].a, r[2].a};
-        double scale = 1.0;
-        rest += correct(value, residuals + 3 * i, &scale);
-        for (std::size_t b = 0, at = 0; b < sizes.size(); at += std::size_t(sizes[b]), ++b) {
-          if (!jacobians[b]) continue;
-          for (int row = 0; row < 3; ++row) {
-            double* out = jacobians[b] + (3 * i + std::size_t(row)) * std::size_t(sizes[b]);
-            for (int k = 0; k < sizes[b]; ++k) out[k] = scale * r[row].v[int(at) + k];
-          }
-        }
-      }
-      const std::size_t last = 3 * points_.size();
-      for (std::size_t b = 0; b < sizes.size(); ++b) {
-        if (!jacobians[b]) continue;
-        std::fill_n(jacobians[b] + last * std::size_t(sizes[b]), sizes[b], 0.0);
-      }
-    }
-    residuals[3 * points_.size()] = std::sqrt(std::max(rest, 0.0));
-    return true;
-  }
-
- private:
-  template <class T, std::size_t... B>
-  static bool call(const Residual& f, const T* const* blocks, T* r, std::index_sequence<B...>) {
-    return f(blocks[B]..., r);
-  }
-
-  // Writes the point's corrected residuals; returns rho(s) - rho'(s) s and
-  // (when asked) the scale of its Jacobian rows.
-  double correct(const double* r, double* out, double* scale) const {
-    const double s = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-    double rho[3];
-    loss_.Evaluate(s, rho);
-    const double root = std::sqrt(rho[1]);
-    for (int k = 0; k < 3; ++k) out[k] = root * r[k];
-    if (scale) *scale = root;
-    return rho[0] - rho[1] * s;
-  }
-
-  std::vector<Residual> points_;
-  const ceres::LossFunction& loss_;
-};
-
 // The parameter blocks of one surface fit (in doubles, as Ceres wants them)
 // and the problem over them.
 class SurfaceFit {
@@ -362,7 +265,7 @@ class SurfaceFit {
     problem_ = std::make_unique<ceres::Problem>(problemOptions);
   }
 
-  // Starts the blocks at `surface` and adds the points' residuals.
+  // Starts the blocks at `surface` and adds one residual per point.
   template <class Term>
   void build(const Surface& surface, std::span<const std::uint32_t> pts, const Term& term) {
     ceres::Problem& problem = *problem_;
@@ -377,10 +280,11 @@ class SurfaceFit {
         const auto& s = *surface.as<PlaneSurface>();
         setUnit(a_, s.normal);
         d_[0] = s.offset;
-        std::vector<PlaneResidual> terms;
-        for (std::uint32_t i : pts) terms.push_back({term(i)});
-        problem.AddResidualBlock(new PointsCost<PlaneResidual, 3, 1>(std::move(terms), loss_),
-                                 nullptr, a_, d_);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(
+              new ceres::AutoDiffCostFunction<PlaneResidual, 3, 3, 1>(new PlaneResidual{term(i)}),
+              &loss_, a_, d_);
+        }
         problem.SetManifold(a_, new ceres::SphereManifold<3>());
         break;
       }
@@ -392,10 +296,11 @@ class SurfaceFit {
         const Mat3 f = frameFromAxis(axis);
         u_ = f.col(0), v_ = f.col(1);
         d_[0] = std::max(s.radius, 2.0 * minLength);
-        std::vector<CylinderResidual> terms;
-        for (std::uint32_t i : pts) terms.push_back({term(i), base_, u_, v_});
-        problem.AddResidualBlock(new PointsCost<CylinderResidual, 3, 2, 1>(std::move(terms), loss_),
-                                 nullptr, a_, c_, d_);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CylinderResidual, 3, 3, 2, 1>(
+                                       new CylinderResidual{term(i), base_, u_, v_}),
+                                   &loss_, a_, c_, d_);
+        }
         problem.SetManifold(a_, new ceres::SphereManifold<3>());
         problem.SetParameterLowerBound(d_, 0, minLength);
         break;
@@ -405,10 +310,11 @@ class SurfaceFit {
         b_[0] = s.apex.x(), b_[1] = s.apex.y(), b_[2] = s.apex.z();
         setUnit(a_, s.axisDir);
         d_[0] = std::clamp(s.halfAngle, 2e-3, 0.5 * std::numbers::pi - 2e-3);
-        std::vector<ConeResidual> terms;
-        for (std::uint32_t i : pts) terms.push_back({term(i)});
-        problem.AddResidualBlock(new PointsCost<ConeResidual, 3, 3, 1>(std::move(terms), loss_),
-                                 nullptr, b_, a_, d_);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(
+              new ceres::AutoDiffCostFunction<ConeResidual, 3, 3, 3, 1>(new ConeResidual{term(i)}),
+              &loss_, b_, a_, d_);
+        }
         problem.SetManifold(a_, new ceres::SphereManifold<3>());
         problem.SetParameterLowerBound(d_, 0, 1e-3);
         problem.SetParameterUpperBound(d_, 0, 0.5 * std::numbers::pi - 1e-3);
@@ -418,10 +324,11 @@ class SurfaceFit {
         const auto& s = *surface.as<SphereSurface>();
         b_[0] = s.center.x(), b_[1] = s.center.y(), b_[2] = s.center.z();
         d_[0] = std::max(s.radius, 2.0 * minLength);
-        std::vector<SphereResidual> terms;
-        for (std::uint32_t i : pts) terms.push_back({term(i)});
-        problem.AddResidualBlock(new PointsCost<SphereResidual, 3, 1>(std::move(terms), loss_),
-                                 nullptr, b_, d_);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(
+              new ceres::AutoDiffCostFunction<SphereResidual, 3, 3, 1>(new SphereResidual{term(i)}),
+              &loss_, b_, d_);
+        }
         problem.SetParameterLowerBound(d_, 0, minLength);
         break;
       }
@@ -431,10 +338,11 @@ class SurfaceFit {
         setUnit(a_, s.axisDir);
         d_[0] = std::max(s.majorRadius, 2.0 * minLength),
         d_[1] = std::max(s.minorRadius, 2.0 * minLength);
-        std::vector<TorusResidual> terms;
-        for (std::uint32_t i : pts) terms.push_back({term(i)});
-        problem.AddResidualBlock(new PointsCost<TorusResidual, 3, 3, 2>(std::move(terms), loss_),
-                                 nullptr, b_, a_, d_);
+        for (std::uint32_t i : pts) {
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TorusResidual, 3, 3, 3, 2>(
+                                       new TorusResidual{term(i)}),
+                                   &loss_, b_, a_, d_);
+        }
         problem.SetManifold(a_, new ceres::SphereManifold<3>());
         problem.SetParameterLowerBound(d_, 0, minLength);
         problem.SetParameterLowerBound(d_, 1, minLength);
@@ -454,12 +362,6 @@ class SurfaceFit {
     solverOptions.function_tolerance = 1e-12;
     solverOptions.parameter_tolerance = 1e-12;
     solverOptions.gradient_tolerance = 1e-14;
-    // Bounds (a radius above zero, a cone's angle in range) make Ceres
-    // follow each step with a projected line search. Its default cubic
-    // interpolation evaluates every point's Jacobian at each trial step,
-    // which doubled the cost of a fit; the quadratic one needs costs only.
-    // The full step, the usual case, is tried and taken alike.
-    solverOptions.line_search_interpolation_type = ceres::QUADRATIC;
     ceres::Solver::Summary summary;
     ceres::Solve(solverOptions, problem_.get(), &summary);
   }
