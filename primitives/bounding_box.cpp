@@ -134,7 +134,8 @@ Mat3 anyHandedFrame(std::span<const Vec3> points, const MinimalBoxOptions& optio
   for (std::size_t i = 0; i < points.size(); i += step) {
     searched.emplace_back(points[i].x(), points[i].y(), points[i].z());
   }
-  if (searched.size() > kHullFilterPoints) searched = hullCandidates(searched);
+  if (options.hullFilter && searched.size() > kHullFilterPoints)
+    searched = hullCandidates(searched);
   K::Aff_transformation_3 transform;
   CGAL::oriented_bounding_box(searched, transform, CGAL::parameters::random_seed(options.seed));
   // The transformation rotates the points into the box's axis-aligned frame:

@@ -14,6 +14,8 @@ struct MinimalBoxOptions {
   std::uint32_t seed = 1;           ///< seed of CGAL's randomised search (same seed, same box)
   std::size_t maxSearchPoints = 0;  ///< the orientation is searched on at most this many evenly
                                     ///< spread points (count; 0 = all points)
+  bool hullFilter = true;  ///< above 20 000 points, drop those that cannot be corners of the
+                           ///< convex hull before the search (the same box, found sooner)
 };
 
 /// Axes (columns, orthonormal, right-handed) of the minimal-volume oriented

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <vector>
 
@@ -84,6 +86,35 @@ TEST(MinimalBoxFrame, ALargeSetGivesTheFrameOfItsHullCorners) {
                 points[std::size_t(977 * c + 13 * trial + 5)]);
     }
     EXPECT_EQ(minimalBoxFrame(points, {3, 0}), minimalBoxFrame(corners, {3, 0})) << trial;
+  }
+}
+
+// Points on a part's faces, as a scan gives them: the faces' points lie on
+// the filter's hull faces up to rounding, where the exact predicate decides.
+// The search finds the same frame with the filter and without it.
+TEST(MinimalBoxFrame, TheHullFilterKeepsTheFrameOfPointsOnFaces) {
+  Rng rng(21);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Mat3 rotation = test::randomRotation(rng);
+    const Vec3 centre(-2, 7, 1), half(5, 3, 1.5);
+    std::vector<Vec3> points;
+    for (int i = 0; i < 40000; ++i) {
+      Vec3 local;
+      for (int k = 0; k < 3; ++k) local[k] = test::uniform(rng, -half[k], half[k]);
+      const int face = i % 6;  // onto one of the six faces
+      local[face / 2] = face % 2 ? half[face / 2] : -half[face / 2];
+      points.push_back(centre + rotation * local);
+    }
+    // A boss: a cylinder's side standing on the top face.
+    for (int i = 0; i < 10000; ++i) {
+      const double a = test::uniform(rng, 0.0, 2.0 * std::numbers::pi);
+      const Vec3 local(1.5 * std::cos(a), 1.5 * std::sin(a),
+                       half[2] + test::uniform(rng, 0.0, 2.0));
+      points.push_back(centre + rotation * local);
+    }
+    MinimalBoxOptions all{4, 0};
+    all.hullFilter = false;
+    EXPECT_EQ(minimalBoxFrame(points, {4, 0}), minimalBoxFrame(points, all)) << trial;
   }
 }
 
