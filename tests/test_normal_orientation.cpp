@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <random>
 #include <vector>
 
 #include "core/nearest_neighbors.h"
 #include "io/scan_reader.h"
+#include "io/tree_json.h"
 #include "primitives/normal_estimation.h"
 #include "primitives/normal_orientation.h"
 #include "raw_scan.h"
@@ -58,9 +60,11 @@ TEST(OrientNormals, RawScansWithAnUnseenFaceNoiseAndADoubledSurfaceFaceOutwards)
 
 TEST(OrientNormals, ThinWallsFaceOutwards) {
   // A 1.5 mm sheet and a 2 mm pin, 20 000 points (spacing about 1 mm).
-  // Not yet: thin/slotted_plate (a 0.6 mm cut) reads 0.973, and
-  // thin/thin_tray (1 mm walls) about half inwards, as with the spanning
-  // forest alone.
+  // Not yet: thin/slotted_plate (a 0.6 mm cut) reads 0.973, and the clean
+  // thin/thin_tray (1 mm walls, every neighbourhood reaching both faces):
+  // its normals' mean cosine with the true ones is 0.61 (0.07 before its
+  // walls' faces were kept apart, see below), but the jet fits over both
+  // faces tilt the normals themselves (12 % within 10 degrees).
   for (const char* part : {"thin/sheet_bracket", "thin/pin_base"}) {
     SCOPED_TRACE(part);
     const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / part / "scan.ply");
@@ -68,6 +72,25 @@ TEST(OrientNormals, ThinWallsFaceOutwards) {
     estimateNormals(cloud, 18);
     EXPECT_GE(signAgreement(cloud.normals, scan.cloud.normals), 0.99);
   }
+}
+
+TEST(OrientNormals, TheWallsOfAScannedTrayFaceOutwards) {
+  // The bundled scanner scan of the tray (raw x y z, two setups, noise
+  // growing at grazing incidence): its 1 mm walls are about one point
+  // spacing thick and the rim between their faces narrower than a
+  // neighbourhood. Measured 0.983; before patches were kept to one face of
+  // a wall, about 0.75 (the inner faces took the outer faces' side across
+  // the rim, and the walls' two faces made the noise level a third of the
+  // wall, so that the faces' points joined one patch).
+  const fs::path dir = fs::path(CSGVOX_DATA_DIR) / "thin" / "thin_tray";
+  const Scan scan = readScan(dir / "scan_scanner.ply");
+  ASSERT_TRUE(scan.info.normalsEstimated);
+  const CsgTree tree = readTreeJson(dir / "tree.json");
+  std::vector<Vec3> truth;
+  for (const Vec3& p : scan.cloud.points) truth.push_back(-tree.evaluate(p).gradient.normalized());
+  const double agreement = signAgreement(scan.cloud.normals, truth);
+  std::printf("thin_tray scanner scan: %.4f of the normals outward\n", agreement);
+  EXPECT_GE(agreement, 0.96);
 }
 
 TEST(OrientNormals, VisibilityAloneOrientsAClosedScan) {
