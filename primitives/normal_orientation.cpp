@@ -68,11 +68,13 @@ constexpr double kSheetGapSpread = 3.0;
 constexpr double kFoldFraction = 0.75;
 // A patch holds both faces of a thin wall when at least this fraction of
 // its points, and kFoldedPoints, see another of its points across a gap
-// (on another face). Measured on the bundled parts' scanner scans (seeds 1
-// and 2): 46-49 % on the tray's most folded patch; on the other parts at
-// most 1 % of a patch with 50 or more such points (countersunk_plate: the
-// tails of its noise), 2.7 % of one with 10 or more, and up to 40 % of a
-// few of 40-100 points (pin_base's head).
+// (on another face). Measured on the bundled parts' scanner scans (their
+// scan_scanner.ply and the scanner model's seeds 1 and 2): 46-49 % on the
+// tray's most folded patch, 26 % on the sheet bracket's scan_scanner.ply
+// (its seed-1 and seed-2 scans stay below); on the other parts at most 1 %
+// of a patch with 50 or more such points (countersunk_plate: the tails of
+// its noise), 3.6 % of one with 10 or more, and up to 40 % of a few of
+// 40-150 points (pin_base's head: 48 of 144 on its scan_scanner.ply).
 constexpr double kFoldedFraction = 0.04;
 constexpr std::size_t kFoldedPoints = 50;
 // Points that cast rays, at most (a deterministic stride over the points).
