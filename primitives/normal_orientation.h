@@ -19,6 +19,23 @@ namespace csgvox {
 ///    their distance and 3 times the noise, a low quantile of the
 ///    neighbourhoods' residuals: the two faces of a thin wall) join one
 ///    patch; within a patch the normals are made consistent.
+///    Thin walls: a neighbourhood whose offsets along the normal fall into
+///    two groups (the largest gap between them over 3 times their spread,
+///    at least 3 points each side) spans both faces of a wall thinner than
+///    itself. Where a patch holds both faces (at least 4 % of its points,
+///    and 50, see one of its points beyond that gap: the faces joined
+///    where a rim narrower than the neighbourhoods runs between them), the
+///    scan has thin walls and its patches are flooded again: the noise is
+///    then measured over each neighbourhood's own face, neighbours beyond
+///    the first jump of 3 times the noise on either side of a point lie on
+///    another face, and a point joins a patch only if no patch point in its
+///    neighbourhood does (by those jumps, or by an offset along the patch's
+///    first normal over 0.75 of their distance and 3 times the noise).
+///    Exact points (noise over one face below 1e-6 of the spacing: sampled
+///    from a mesh, not scanned) are not searched for thin walls: without
+///    noise every edge or curved neighbourhood shows such a gap.
+///    Elsewhere the noise is a low quantile of the whole neighbourhoods'
+///    residuals and the patches are flooded once.
 /// 2. Visibility: rays march through an occupancy grid of the points (cells
 ///    one median spacing wide, each point filling its own spacing), starting
 ///    clear of the point's own layer. Parity rays, along +n and -n and four

@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <random>
 #include <vector>
 
 #include "core/nearest_neighbors.h"
 #include "io/scan_reader.h"
+#include "io/tree_json.h"
 #include "primitives/normal_estimation.h"
 #include "primitives/normal_orientation.h"
 #include "raw_scan.h"
@@ -58,9 +60,11 @@ TEST(OrientNormals, RawScansWithAnUnseenFaceNoiseAndADoubledSurfaceFaceOutwards)
 
 TEST(OrientNormals, ThinWallsFaceOutwards) {
   // A 1.5 mm sheet and a 2 mm pin, 20 000 points (spacing about 1 mm).
-  // Not yet: thin/slotted_plate (a 0.6 mm cut) reads 0.973, and
-  // thin/thin_tray (1 mm walls) about half inwards, as with the spanning
-  // forest alone.
+  // Not yet: thin/slotted_plate (a 0.6 mm cut) reads 0.973, and the clean
+  // thin/thin_tray (1 mm walls, every neighbourhood reaching both faces):
+  // its normals' mean cosine with the true ones is 0.61 (0.07 before its
+  // walls' faces were kept apart, see below), but the jet fits over both
+  // faces tilt the normals themselves (12 % within 10 degrees).
   for (const char* part : {"thin/sheet_bracket", "thin/pin_base"}) {
     SCOPED_TRACE(part);
     const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / part / "scan.ply");
@@ -68,6 +72,51 @@ TEST(OrientNormals, ThinWallsFaceOutwards) {
     estimateNormals(cloud, 18);
     EXPECT_GE(signAgreement(cloud.normals, scan.cloud.normals), 0.99);
   }
+}
+
+TEST(OrientNormals, ThinWallsOfScannerScansFaceOutwards) {
+  // The bundled scanner scans (raw x y z, two setups, noise growing at
+  // grazing incidence) of the tray (1 mm walls, about one point spacing
+  // thick) and the sheet bracket (1.5 mm sheet): the rims between their
+  // walls' faces are narrower than a neighbourhood. Measured 0.983 and
+  // 0.996; before patches were kept to one face of a wall, 0.74 and 0.78
+  // (the faces seen less took the other faces' side across the rims, and
+  // neighbourhoods spanning both faces made the noise level so large that
+  // the faces' points joined one patch).
+  struct Case {
+    const char* part;
+    double least;
+  };
+  for (const Case c : {Case{"thin_tray", 0.96}, Case{"sheet_bracket", 0.98}}) {
+    SCOPED_TRACE(c.part);
+    const fs::path dir = fs::path(CSGVOX_DATA_DIR) / "thin" / c.part;
+    const Scan scan = readScan(dir / "scan_scanner.ply");
+    ASSERT_TRUE(scan.info.normalsEstimated);
+    const CsgTree tree = readTreeJson(dir / "tree.json");
+    std::vector<Vec3> truth;
+    for (const Vec3& p : scan.cloud.points) {
+      truth.push_back(-tree.evaluate(p).gradient.normalized());
+    }
+    const double agreement = signAgreement(scan.cloud.normals, truth);
+    std::printf("%s scanner scan: %.4f of the normals outward\n", c.part, agreement);
+    EXPECT_GE(agreement, c.least);
+  }
+}
+
+TEST(OrientNormals, ExactSamplesAreNotSearchedForThinWalls) {
+  // 60 000 points sampled from InverseCSG 060's mesh (no noise), normals
+  // estimated from the positions: without noise every edge or curved
+  // neighbourhood splits into two groups of offsets, so a search for thin
+  // walls would find them everywhere. Measured 0.966 of the normals outward
+  // (0.928 when the search ran on exact points too).
+  const Scan scan =
+      readScan(fs::path(CSGVOX_DATA_DIR) / "regressions" / "inversecsg-060-60k.ply");
+  ASSERT_FALSE(scan.info.normalsEstimated);
+  PointCloud cloud{scan.cloud.points, {}};
+  estimateNormals(cloud, 18);
+  const double agreement = signAgreement(cloud.normals, scan.cloud.normals);
+  std::printf("InverseCSG 060, exact sample: %.4f of the normals outward\n", agreement);
+  EXPECT_GE(agreement, 0.95);
 }
 
 TEST(OrientNormals, VisibilityAloneOrientsAClosedScan) {
@@ -106,6 +155,22 @@ TEST(OrientNormals, SameNormalsWithAnyNumberOfThreads) {
     estimateNormals(two, 18);
   }
   EXPECT_EQ(one.normals, two.normals);
+}
+
+TEST(OrientNormals, SameNormalsOnThinWallsWithAnyNumberOfThreads) {
+  // The tray's walls set the thin-wall mode (its patches flooded twice).
+  const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / "thin" / "thin_tray" / "scan_scanner.ply");
+  PointCloud one{scan.cloud.points, {}}, two = one;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    estimateNormals(one, 18);
+  }
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    estimateNormals(two, 18);
+  }
+  EXPECT_EQ(one.normals, two.normals);
+  EXPECT_EQ(one.normals, scan.cloud.normals);
 }
 
 TEST(OrientNormals, RejectsMismatchedSizes) {
