@@ -51,8 +51,15 @@ namespace csgvox {
 ///    tangent plane on one side (a thin wall or slot, closer than the grid
 ///    resolves) votes with the other side's rays only.
 /// 3. A patch whose points vote clearly (mean vote at least 0.35 of the
-///    full vote) takes that side; the others (faces next to an unseen one,
-///    where both sides look alike) keep the incoming normals.
+///    full vote) takes that side. Undecided patches joined by smooth edges
+///    (a curved face the patches' cones split, such as a spherical seat deep
+///    in a bore, whose patches each see little of the outside) form
+///    clusters; a cluster takes the side its decided neighbours imply
+///    across those edges when their votes are significant (vote sum at
+///    least 4 times the square root of their count), they agree (on 90 %
+///    of the edges) and the cluster's own votes do not lean the other way.
+///    The other patches (faces next to an unseen one, where
+///    both sides look alike) keep the incoming normals.
 ///
 /// `neighbours` holds k indices per point, the point itself first (its k
 /// nearest neighbours). Deterministic with any number of threads.
