@@ -71,11 +71,17 @@ struct Lattice {
 };
 
 // Reports the fraction done of each stage to a ProgressCallback, from any
-// thread (one call at a time); remembers a request to stop.
+// thread (one call at a time, never lower than the last within a stage:
+// two threads' counts may reach the lock in either order); remembers a
+// request to stop.
 class Progress {
  public:
   explicit Progress(const RunControl& control) : control_(control) {}
   void stage(std::string_view name, std::size_t total) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      last_ = 0.0;
+    }
     stage_ = name;
     total_ = std::max<std::size_t>(total, 1);
     done_ = 0;
@@ -96,7 +102,8 @@ class Progress {
  private:
   void report(double fraction) {
     const std::lock_guard<std::mutex> lock(mutex_);
-    control_.report(std::min(fraction, 1.0), stage_);
+    last_ = std::max(last_, std::min(fraction, 1.0));
+    control_.report(last_, stage_);
   }
 
   const RunControl& control_;
@@ -104,6 +111,7 @@ class Progress {
   std::size_t total_ = 1;
   std::atomic<std::size_t> done_{0};
   std::mutex mutex_;
+  double last_ = 0.0;  // the last fraction reported in this stage
 };
 
 // The tree's field near its surface: each sampled leaf of the lattice keeps
