@@ -514,7 +514,7 @@ std::vector<int> patchSigns(std::span<const Vec3> points, std::span<const Vec3> 
     for (unsigned l = 1; l < hoods.k; ++l) {
       const std::uint32_t j = hoods.of(i)[l];
       const std::uint32_t b = patches.of[j];
-      if (b <= a) continue;  // each edge once, from the lower patch's point
+      if (b <= a) continue;  // each pair once: from the lower patch's points only
       if (!smoothEdge(points[i], normals[i], points[j], normals[j], noise)) continue;
       edges.emplace_back(a, b, normals[i].dot(normals[j]) > 0.0 ? 1 : -1);
     }

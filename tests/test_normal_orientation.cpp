@@ -139,8 +139,7 @@ TEST(OrientNormals, ExactSamplesAreNotSearchedForThinWalls) {
   // neighbourhood splits into two groups of offsets, so a search for thin
   // walls would find them everywhere. Measured 0.966 of the normals outward
   // (0.928 when the search ran on exact points too).
-  const Scan scan =
-      readScan(fs::path(CSGVOX_DATA_DIR) / "regressions" / "inversecsg-060-60k.ply");
+  const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / "regressions" / "inversecsg-060-60k.ply");
   ASSERT_FALSE(scan.info.normalsEstimated);
   PointCloud cloud{scan.cloud.points, {}};
   estimateNormals(cloud, 18);
