@@ -401,11 +401,10 @@ struct Votes {
 };
 
 Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normals,
-                      const Patches& patches, std::span<const double> spacing, double noise,
-                      const Hoods& hoods) {
+                      const Patches& patches, std::span<const double> spacing, double medianSpacing,
+                      double noise, const Hoods& hoods) {
   const std::size_t n = points.size();
-  std::vector<double> sorted(spacing.begin(), spacing.end());
-  const Occupancy grid(points, spacing, kCellSpacings * median(sorted));
+  const Occupancy grid(points, spacing, kCellSpacings * medianSpacing);
   const std::size_t stride = std::max<std::size_t>(1, n / kVisibilitySamples);
   const std::size_t samples = (n + stride - 1) / stride;
   // Escape directions: a Fibonacci lattice on the sphere.
@@ -541,12 +540,14 @@ std::vector<int> patchSigns(std::span<const Vec3> points, std::span<const Vec3> 
   std::vector<std::uint32_t> cluster(count, UINT32_MAX);
   std::vector<int> relative(count, 0);
   std::vector<std::vector<std::uint32_t>> members;
-  using Step = std::tuple<int, std::uint32_t, std::uint32_t>;  // |net|, ~target, ~source
+  // |net|, ~target, ~source, the target's side relative to the first.
+  using Step = std::tuple<int, std::uint32_t, std::uint32_t, int>;
   std::priority_queue<Step> queue;
   const auto reach = [&](std::uint32_t from) {
     for (const Link& link : links[from]) {
       if (sign[link.other] == 0 && cluster[link.other] == UINT32_MAX) {
-        queue.emplace(std::abs(link.net), ~link.other, ~from);
+        queue.emplace(std::abs(link.net), ~link.other, ~from,
+                      link.net > 0 ? relative[from] : -relative[from]);
       }
     }
   };
@@ -559,13 +560,11 @@ std::vector<int> patchSigns(std::span<const Vec3> points, std::span<const Vec3> 
     reach(first);
     while (!queue.empty()) {
       const std::uint32_t target = ~std::get<1>(queue.top());
-      const std::uint32_t source = ~std::get<2>(queue.top());
+      const int side = std::get<3>(queue.top());
       queue.pop();
       if (cluster[target] != UINT32_MAX) continue;
-      const auto link = std::find_if(links[source].begin(), links[source].end(),
-                                     [&](const Link& l) { return l.other == target; });
       cluster[target] = c;
-      relative[target] = link->net > 0 ? relative[source] : -relative[source];
+      relative[target] = side;
       members[c].push_back(target);
       reach(target);
     }
@@ -616,9 +615,10 @@ void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
   for (std::size_t i = 0; i < n; ++i) {
     spacing[i] = (points[hoods.of(i)[k - 1]] - points[i]).norm() * std::sqrt(std::numbers::pi / k);
   }
-  const double faceNoise = typicalResidual(splits);
   std::vector<double> sorted(spacing);
-  if (faceNoise > kExactNoise * median(sorted) &&
+  const double medianSpacing = median(sorted);
+  const double faceNoise = typicalResidual(splits);
+  if (faceNoise > kExactNoise * medianSpacing &&
       holdsBothFaces(points, provisional, hoods, splits, patches)) {
     // Thin walls: the noise is measured on their faces one at a time, and
     // the patches are flooded again with the faces kept apart.
@@ -629,7 +629,8 @@ void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
     patches.of.assign(n, UINT32_MAX);
     floodPatches(points, normals, hoods, splits, provisional, noise, true, patches);
   }
-  const Votes votes = visibilityVotes(points, normals, patches, spacing, noise, hoods);
+  const Votes votes =
+      visibilityVotes(points, normals, patches, spacing, medianSpacing, noise, hoods);
   const std::vector<int> sign = patchSigns(points, normals, hoods, patches, votes, noise);
   for (std::size_t p = 0; p < patches.points.size(); ++p) {
     for (std::uint32_t i : patches.points[p]) {
