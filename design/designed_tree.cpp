@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -26,15 +26,20 @@ namespace {
 constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const char* const kAxisLetter[3] = {"x", "y", "z"};
+// Points this near a leaf (fraction of the part's diagonal) say where its
+// faces lie, and how many of them at least.
+constexpr double kNearBand = 0.01;
+constexpr std::size_t kLeastOffsets = 3;
 // One value of the fitted tree before grouping.
 struct Slot {
   ValueCategory category = ValueCategory::Step;
   double value = 0.0;
-  double support = 0.0;  // points holding it (kInf: exact, e.g. a count)
-  double lever = 1.0;    // Angle: radius the angle is read at (its uncertainty is u / lever)
-  std::string name;      // owner_field
-  std::set<int> leaves;  // designed leaves using it
-  std::string owner;     // a pattern's name, when a pattern owns it
+  double support = 0.0;         // points holding it (kInf: exact, e.g. a count)
+  double lever = 1.0;           // Angle: radius the angle is read at (its uncertainty is u / lever)
+  std::string name;             // owner_field
+  std::set<int> leaves;         // designed leaves using it
+  std::string owner;            // a pattern's name, when a pattern owns it
+  std::vector<double> offsets;  // how far each point near its face would move it
 };
 
 std::string plural(const std::string& role, int n) {
@@ -153,12 +158,25 @@ class Designer {
     }
     // Points on each leaf, with their local gradients.
     gradients_.resize(d_.leaves.size());
+    near_.resize(d_.leaves.size());
+    nearGradients_.resize(d_.leaves.size());
     if (!localPoints_.empty()) {
       const PointSupport support = pointSupport(local_, localPoints_);
       d_.noise = support.noise;
       for (std::size_t i = 0; i < localPoints_.size(); ++i) {
         if (support.leaf[i])
           gradients_[std::size_t(localIndex_.at(support.leaf[i]))].push_back(support.gradient[i]);
+      }
+      // The points near each leaf, also those a fit left a little off it:
+      // where they all lie off one face, the face is off (see refitted()).
+      SupportOptions wide;
+      wide.leastBand = kNearBand * diagonal_;
+      const PointSupport nearSupport = pointSupport(local_, localPoints_, wide);
+      for (std::size_t i = 0; i < localPoints_.size(); ++i) {
+        if (!nearSupport.leaf[i]) continue;
+        const std::size_t leaf = std::size_t(localIndex_.at(nearSupport.leaf[i]));
+        near_[leaf].push_back(localPoints_[i]);
+        nearGradients_[leaf].push_back(nearSupport.gradient[i]);
       }
     }
   }
@@ -206,6 +224,13 @@ class Designer {
     });
   }
 
+  // When a cone's narrow cap runs on to its apex: its radius within twice
+  // the noise or 0.5 % of the part's diagonal (a tip that thin has too few
+  // points for the fit to reach it), the tip it adds at most 2 % of it.
+  ApexReach apexReach() const {
+    return {std::max(0.005 * diagonal_, 2.0 * d_.noise), 0.02 * diagonal_};
+  }
+
   // The radius an angle of the leaf is read at: half a turned box's width.
   double leverOf(const DesignedLeaf& l) const {
     if (l.form == LeafForm::TiltedHalfSpace) return 0.5 * diagonal_;
@@ -251,11 +276,13 @@ class Designer {
       DesignedLeaf& l = d_.leaves[i];
       std::vector<LeafField> fields = leafFields(l);
       const std::vector<double> n = fieldSupport(l, fields, gradients_[i]);
-      if (!localPoints_.empty() && slide_) slideFreeConeCaps(l, fields, n);
+      if (!localPoints_.empty() && slide_) slideFreeConeCaps(l, fields, n, apexReach());
+      const auto offsets = fieldOffsets(l, fields, near_[i], nearGradients_[i]);
       for (std::size_t k = 0; k < fields.size(); ++k) {
-        *fields[k].expression =
-            Expression::of(addSlot(fields[k].category, fields[k].value, n[k],
-                                   l.name + "_" + fields[k].name, int(i), leverOf(l)));
+        const int slot = addSlot(fields[k].category, fields[k].value, n[k],
+                                 l.name + "_" + fields[k].name, int(i), leverOf(l));
+        slots_[std::size_t(slot)].offsets = offsets[k];
+        *fields[k].expression = Expression::of(slot);
       }
     }
   }
@@ -291,13 +318,16 @@ class Designer {
     // offsets in the pattern), supported by every member's points.
     std::vector<std::vector<LeafField>> fields;
     std::vector<std::vector<double>> support;
+    std::vector<std::vector<std::vector<double>>> offsets;
     for (int m : f.members) {
+      const DesignedLeaf& l = d_.leaves[std::size_t(m)];
       fields.push_back(leafFields(d_.leaves[std::size_t(m)]));
-      support.push_back(
-          fieldSupport(d_.leaves[std::size_t(m)], fields.back(), gradients_[std::size_t(m)]));
+      support.push_back(fieldSupport(l, fields.back(), gradients_[std::size_t(m)]));
       if (!localPoints_.empty() && slide_) {
-        slideFreeConeCaps(d_.leaves[std::size_t(m)], fields.back(), support.back());
+        slideFreeConeCaps(l, fields.back(), support.back(), apexReach());
       }
+      offsets.push_back(
+          fieldOffsets(l, fields.back(), near_[std::size_t(m)], nearGradients_[std::size_t(m)]));
     }
     double crossSupport = 0.0;
     std::array<double, 3> stepSupport = {0.0, 0.0, 0.0};  // points placing the members per axis
@@ -325,6 +355,11 @@ class Designer {
       const int s =
           addSlot(f0.category, sum / n, n_k, first.name + "_" + f0.name, f.members.front());
       for (int m : f.members) slots_[std::size_t(s)].leaves.insert(m);
+      for (int i = 0; i < n; ++i) {
+        const std::vector<double>& o = offsets[std::size_t(i)][k];
+        slots_[std::size_t(s)].offsets.insert(slots_[std::size_t(s)].offsets.end(), o.begin(),
+                                              o.end());
+      }
       for (int i = 0; i < n; ++i) *fields[std::size_t(i)][k].expression = Expression::of(s);
     }
     const auto own = [&](int slot) {
@@ -410,10 +445,21 @@ class Designer {
         paramOf[std::size_t(s)] = index;
         merged.leaves.insert(slots_[std::size_t(s)].leaves.begin(),
                              slots_[std::size_t(s)].leaves.end());
+        if (s != group.front()) {
+          merged.offsets.insert(merged.offsets.end(), slots_[std::size_t(s)].offsets.begin(),
+                                slots_[std::size_t(s)].offsets.end());
+        }
       }
       p.fitted = sum / double(group.size());
       p.value = p.fitted;
       p.uncertainty = uncertainty(support, first.lever, p.kind);
+      if (p.kind == ParameterKind::Length && !std::isfinite(p.uncertainty) &&
+          merged.offsets.size() >= kLeastOffsets && !localPoints_.empty()) {
+        // No point within the noise band, some near (a face a fit left off
+        // its points): they hold it, as tightly as they agree.
+        p.uncertainty = options_.confidence * std::max(spread(merged.offsets), d_.noise) /
+                        std::sqrt(double(merged.offsets.size()));
+      }
       merged.support = support;
       d_.parameters.push_back(p);
       paramSlots_.push_back(merged);
@@ -623,12 +669,19 @@ class Designer {
       }
       double growth = 0.0;
       for (double b : bound) growth += b;
-      const double n = double(localPoints_.size());
-      if (!fitsPoints(baseDesignedDistance_ + growth / n)) {
+      const double n = double(localPoints_.size()), m = double(close.size());
+      // Near the change, the points' mean distance may grow by one standard
+      // error of it at most (σ/√m: a noisy shaft's hub radius fitted 15.536
+      // ± 0.038 is not 15.5, its points say, though over all points the
+      // change is lost); over all points, by fitnessSlack noise deviations.
+      const double noise = std::max(d_.noise, options_.minNoise * diagonal_);
+      if (growth > 0.0 &&
+          (growth / m > noise / std::sqrt(m) || !fitsPoints(baseDesignedDistance_ + growth / n))) {
         std::vector<double> g(close.size());
         tree.values(close, g);
         double is = 0.0;
         for (double x : g) is += std::abs(x);
+        if ((is - was) / m > noise / std::sqrt(m)) return -1.0;
         if (!fitsPoints(baseDesignedDistance_ + (is - was) / n)) return -1.0;
       }
     }
@@ -656,7 +709,7 @@ class Designer {
       if (p.kind == ParameterKind::Count) continue;
       candidate[i] = p.kind == ParameterKind::Angle
                          ? simplestAngle(p.fitted, p.uncertainty)
-                         : simplestLength(p.fitted, p.uncertainty, d_.units);
+                         : simplestLength(refitted(int(i)), p.uncertainty, d_.units);
       if (candidate[i] && *candidate[i] != p.fitted) all.push_back(int(i));
       if (candidate[i] && *candidate[i] == p.fitted) d_.parameters[i].snapped = true;
     }
@@ -709,7 +762,10 @@ class Designer {
       apply({i}, true);
       const double iou = check({i});
       apply({i}, false);
-      if (passes(iou, allowed)) passing.emplace_back(iou, i);
+      if (passes(iou, allowed) || (trusted(i, *candidate[std::size_t(i)]) &&
+                                   passes(iou, uncertaintyCost(i, *candidate[std::size_t(i)])))) {
+        passing.emplace_back(iou, i);
+      }
     }
     std::stable_sort(passing.begin(), passing.end(),
                      [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -723,6 +779,58 @@ class Designer {
     for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
   }
 
+  // Robust deviation of a sample: 1.4826 × its median absolute deviation.
+  static double spread(std::vector<double> v) {
+    const auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    const double m = *mid;
+    for (double& x : v) x = std::abs(x - m);
+    std::nth_element(v.begin(), mid, v.end());
+    return 1.4826 * *mid;
+  }
+
+  // The value parameter i's points imply: the fitted one, unless the points
+  // near its faces lie off them beyond the noise band and its uncertainty
+  // (their median offset; a clean scan's face a fit left 0.008 off, which
+  // the points within the band, a few on its edges, cannot tell): then
+  // where they lie.
+  double refitted(int i) const {
+    const DesignParameter& p = d_.parameters[std::size_t(i)];
+    std::vector<double> o = paramSlots_[std::size_t(i)].offsets;
+    if (o.size() < kLeastOffsets || !std::isfinite(p.uncertainty)) return p.fitted;
+    const auto mid = o.begin() + std::ptrdiff_t(o.size() / 2);
+    std::nth_element(o.begin(), mid, o.end());
+    const double band = SupportOptions{}.band * d_.noise;
+    return std::abs(*mid) > std::max(p.uncertainty, band) ? p.fitted + *mid : p.fitted;
+  }
+
+  // A length's snap that chance would rarely give: its uncertainty at most
+  // a quarter of its rung's step (a value lands within u of some multiple
+  // of that step with probability 2u / step, here at most a half); a
+  // loosely held value's whole unit is rounding, not a designed value found.
+  bool trusted(int i, double target) const {
+    const DesignParameter& p = d_.parameters[std::size_t(i)];
+    if (p.kind != ParameterKind::Length) return false;
+    const int rung = ladderRung(target, d_.units);
+    return rung >= 0 && p.uncertainty <= 0.25 * ladderStep(rung, d_.units);
+  }
+
+  // What moving parameter i by its own uncertainty towards `target` costs
+  // the IoU against the fitted tree: a snap within the uncertainty may cost
+  // as much, since the fitted value is no surer than that (a noisy scan's
+  // large face or thin wall moves many grid points for a u of 0.07).
+  // Without points the uncertainty is a nominal tolerance, not a
+  // measurement: no cost is allowed for it.
+  double uncertaintyCost(int i, double target) {
+    DesignParameter& p = d_.parameters[std::size_t(i)];
+    if (localPoints_.empty() || !std::isfinite(p.uncertainty) || target == p.fitted) return 0.0;
+    p.value = p.fitted + std::copysign(p.uncertainty, target - p.fitted);
+    const double iou = check({i});
+    p.value = p.fitted;
+    const double baseIou = baseUnion_ > 0 ? double(baseInter_) / double(baseUnion_) : 1.0;
+    return iou < 0.0 ? 0.0 : std::max(0.0, baseIou - iou);
+  }
+
   void measureDatumOffset() {
     // An offset below a tenth of the finest uncertainty along its axis is
     // left alone (a clean scan's, at float noise): the design would not move.
@@ -732,7 +840,7 @@ class Designer {
       const int axis = int(paramSlots_[i].category);
       if (axis > 2 || !p.snapped || !std::isfinite(p.uncertainty) || p.uncertainty <= 0.0) continue;
       const double w = 1.0 / (p.uncertainty * p.uncertainty);
-      sum[axis] += w * (p.fitted - p.value);
+      sum[axis] += w * (refitted(int(i)) - p.value);
       weight[axis] += w;
       finest[axis] = std::min(finest[axis], p.uncertainty);
     }
@@ -839,6 +947,7 @@ class Designer {
   double diagonal_ = 1.0;
   std::unordered_map<const Node*, int> localIndex_;
   std::vector<std::vector<Vec3>> gradients_;
+  std::vector<std::vector<Vec3>> near_, nearGradients_;  // points near each leaf (kNearBand)
   std::vector<FoundPattern> found_;
   std::vector<Slot> slots_;
   std::vector<Slot> paramSlots_;
@@ -846,9 +955,9 @@ class Designer {
   double baseDistance_ = 0.0;
   std::vector<double> baseAbs_;  // each point's |f| to the fitted tree
   // The baseline: the designed tree before any snap.
-  std::vector<Primitive> basePrims_;     // its leaves
+  std::vector<Primitive> basePrims_;                       // its leaves
   mutable std::vector<std::vector<char>> baseLeafInside_;  // see baseInsideOf()
-  std::vector<char> baseInside_;         // its inside flags on the grid
+  std::vector<char> baseInside_;                           // its inside flags on the grid
   long baseInter_ = 0, baseUnion_ = 0;   // its grid cells in and in either with the fitted tree
   std::vector<double> baseDesignedAbs_;  // each point's |f| to it
   double baseDesignedDistance_ = 0.0;    // their mean
@@ -910,6 +1019,23 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
     }
     const double phase = fittedOf(p.phase) / kDeg;
     if (std::abs(phase) < 1e-12) return d;
+    Mat3 spin = Mat3::Identity();
+    spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
+    frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);
+    frame.spinFree = false;
+    return refined(designTree(fitted, frame, points, options), frame);
+  }
+  // Without one, x along the first cylinder or cone across the main axis (a
+  // radial hole or pin), pointing away from the axis: else the world's axes
+  // would leave it oblique, written with its fitted numbers.
+  for (const DesignedLeaf& l : d.leaves) {
+    Vec3 axis = Vec3::Zero(), center = Vec3::Zero();
+    if (const auto* c = l.local.as<Cylinder>()) axis = c->axis, center = c->center;
+    if (const auto* c = l.local.as<Cone>()) axis = c->axis, center = c->center;
+    if (axis.isZero() || std::abs(axis.z()) > std::sin(options.alignTolerance)) continue;
+    if (axis.x() * center.x() + axis.y() * center.y() < 0.0) axis = -axis;
+    const double phase = std::atan2(axis.y(), axis.x());
+    if (std::abs(phase) < 1e-12) return refined(std::move(d), frame);
     Mat3 spin = Mat3::Identity();
     spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
     frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);

@@ -8,14 +8,20 @@
 ///
 ///   uncertainty  u = k·σ/√n: σ the scan's noise about the tree, n the
 ///                points on the faces the value places (infinite when no
-///                point holds it, the tree's own tolerance without points);
+///                point holds it, the tree's own tolerance without points;
+///                points within 1 % of D that the noise band leaves out
+///                hold it too, as tightly as they agree, and where they
+///                all lie off the face the value is snapped from there);
 ///   kept         a value no point holds: when it changes no IoU grid
 ///                point's side; the values the points hold: all together
 ///                when that costs the tree at most 1 − minIou of voxel IoU;
 ///                else per parameter (a group of values the fit shares):
-///                when snapping it alone costs at most that
-///                (against the fitted tree; stratified points, one per
-///                cell) — then for the ones kept, together, while the
+///                when snapping it alone costs at most that, or, for a
+///                length with u at most a quarter of its rung's step, what
+///                moving it by u costs (against the fitted tree;
+///                stratified points, one per cell), and the points near
+///                the change do not move away by more than σ/√m on
+///                average — then for the ones kept, together, while the
 ///                points' mean distance to the tree grows by at most
 ///                fitnessSlack·σ (the costliest dropped until it does).
 ///
@@ -131,15 +137,15 @@ struct DesignOptions {
   double alignTolerance = 1e-4;    ///< a direction this close to a frame axis is taken as it,
                                    ///< radians
   double minIou = 0.999;  ///< least voxel IoU against the fitted tree after one parameter's snap
-  double fitnessSlack = 1.0;       ///< the points' mean distance may grow by this many noise
-                                   ///< deviations
-  double minNoise = 1e-4;          ///< least noise deviation that test allows, fraction of the
-                                   ///< part's diagonal (no scanner measures finer; a sampled
-                                   ///< mesh's points lie on the surface to the last bits)
-  int iouResolution = 48;          ///< IoU grid cells along the longest side of the part
-  int maxPoints = 20000;           ///< scan points used at most (every k-th of a larger scan)
-  bool snap = true;                ///< false: parameters keep their fitted values
-  FrameOptions frame;              ///< how the frame is chosen
+  double fitnessSlack = 1.0;  ///< the points' mean distance may grow by this many noise
+                              ///< deviations
+  double minNoise = 1e-4;     ///< least noise deviation that test allows, fraction of the
+                              ///< part's diagonal (no scanner measures finer; a sampled
+                              ///< mesh's points lie on the surface to the last bits)
+  int iouResolution = 48;     ///< IoU grid cells along the longest side of the part
+  int maxPoints = 20000;      ///< scan points used at most (every k-th of a larger scan)
+  bool snap = true;           ///< false: parameters keep their fitted values
+  FrameOptions frame;         ///< how the frame is chosen
 };
 
 /// The designed form of a fitted tree.

@@ -217,11 +217,41 @@ std::vector<double> fieldSupport(const DesignedLeaf& leaf, const std::vector<Lea
   return n;
 }
 
+std::vector<std::vector<double>> fieldOffsets(const DesignedLeaf& leaf,
+                                              const std::vector<LeafField>& fields,
+                                              const std::vector<Vec3>& points,
+                                              const std::vector<Vec3>& gradients) {
+  std::vector<std::vector<double>> out(fields.size());
+  const auto add = [&](const Expression* e, double offsetFromPoint) {
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+      if (fields[i].expression == e) out[i].push_back(offsetFromPoint - fields[i].value);
+    }
+  };
+  const int a = leaf.axis;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3& g = gradients[i];
+    const Vec3& p = points[i];
+    if (leaf.form == LeafForm::AlignedBox) {
+      int k = 0;
+      g.cwiseAbs().maxCoeff(&k);
+      add(g[k] > 0.0 ? &leaf.lo[std::size_t(k)] : &leaf.hi[std::size_t(k)], p[k]);
+    } else if (leaf.form == LeafForm::Axial && leaf.type != PrimitiveType::Torus) {
+      if (std::abs(g[a]) > kCapCosine) {
+        add(g[a] > 0.0 ? &leaf.lo[std::size_t(a)] : &leaf.hi[std::size_t(a)], p[a]);
+      } else if (const auto* c = leaf.local.as<Cylinder>()) {
+        const Vec3 q = p - c->center;
+        add(&leaf.radius, (q - q.dot(c->axis) * c->axis).norm());
+      }
+    }
+  }
+  return out;
+}
+
 // A cone's cap that no point holds can slide along the cone: moved to the
 // nearest whole unit along the axis (its radius following the slope), its
 // numbers become the ones the cone was drawn with when it was drawn there.
 void slideFreeConeCaps(const DesignedLeaf& leaf, std::vector<LeafField>& fields,
-                       const std::vector<double>& support) {
+                       const std::vector<double>& support, const ApexReach& reach) {
   if (leaf.form != LeafForm::Axial || leaf.type != PrimitiveType::Cone) return;
   const auto find = [&](const Expression* e) {
     for (std::size_t k = 0; k < fields.size(); ++k) {
@@ -249,6 +279,23 @@ void slideFreeConeCaps(const DesignedLeaf& leaf, std::vector<LeafField>& fields,
     fields[lo].value = z0;
     fields[hi].value = z1;
     fields[r0].value = fields[r1].value - slope * (z1 - z0);
+    return;
+  }
+  // A narrow cap short of the apex (a fit stops a point's tip where its
+  // points thin out) runs on to it when within `reach`: the cone was drawn
+  // to a point.
+  const auto toApex = [&](std::size_t z, std::size_t r, double away) {
+    const double radius = fields[r].value;
+    if (!(radius > 0.0) || radius > reach.radius || away * slope >= 0.0) return;
+    const double run = radius / std::abs(slope);
+    if (run > reach.length) return;
+    fields[z].value += away * run;
+    fields[r].value = 0.0;
+  };
+  if (fields[r0].value <= fields[r1].value) {
+    toApex(lo, r0, -1.0);
+  } else {
+    toApex(hi, r1, +1.0);
   }
 }
 

@@ -42,10 +42,27 @@ std::vector<LeafField> leafFields(DesignedLeaf& leaf);
 std::vector<double> fieldSupport(const DesignedLeaf& leaf, const std::vector<LeafField>& fields,
                                  const std::vector<Vec3>& gradients);
 
+/// For each field of `fields`, how far each point near the leaf would move
+/// it onto itself (the point's coordinate less a face's or cap's position,
+/// its distance from a cylinder's axis less the radius); empty for the
+/// other fields. `points` and `gradients` are the leaf's, in frame
+/// coordinates.
+std::vector<std::vector<double>> fieldOffsets(const DesignedLeaf& leaf,
+                                              const std::vector<LeafField>& fields,
+                                              const std::vector<Vec3>& points,
+                                              const std::vector<Vec3>& gradients);
+
+/// How near its apex a cone's narrow cap must be to run on to it.
+struct ApexReach {
+  double radius = 0.0;  ///< the cap's radius at most (scan units)
+  double length = 0.0;  ///< the tip it adds at most, along the axis (scan units)
+};
+
 /// A cone's cap that no point holds slides along the cone to the nearest
 /// whole unit along its axis, its radius following the slope (so that its
-/// numbers become those the cone was drawn with).
+/// numbers become those the cone was drawn with); its narrow cap runs on to
+/// the apex when within `reach` of it (a tip the fit cut short).
 void slideFreeConeCaps(const DesignedLeaf& leaf, std::vector<LeafField>& fields,
-                       const std::vector<double>& support);
+                       const std::vector<double>& support, const ApexReach& reach);
 
 }  // namespace csgvox

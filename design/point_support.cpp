@@ -20,7 +20,7 @@ PointSupport pointSupport(const CsgTree& tree, std::span<const Vec3> points,
   const auto mid = absF.begin() + std::ptrdiff_t(absF.size() / 2);
   std::nth_element(absF.begin(), mid, absF.end());
   s.noise = std::max(1.4826 * *mid, options.noiseFloor * box.diagonal());
-  const double band = options.band * s.noise;
+  const double band = std::max(options.band * s.noise, options.leastBand);
 
   // Each leaf once, in the tree's order (deterministic ties).
   const std::vector<const Node*> ordered = tree.distinctLeaves();

@@ -14,6 +14,7 @@ namespace csgvox {
 struct SupportOptions {
   double band = 3.0;         ///< a point lies on a surface within this many noise deviations
   double noiseFloor = 1e-6;  ///< least noise deviation, fraction of the points' diagonal
+  double leastBand = 0.0;    ///< the band is at least this wide (scan units)
 };
 
 /// The points of a scan on the leaves of a tree.

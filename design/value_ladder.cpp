@@ -1,5 +1,6 @@
 #include "design/value_ladder.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -61,6 +62,11 @@ int ladderRung(double value, UnitSystem units) {
     if (std::abs(k - std::round(k)) <= 1e-9) return int(i);
   }
   return -1;
+}
+
+double ladderStep(int rung, UnitSystem units) {
+  const auto steps = stepsOf(units);
+  return steps[std::size_t(std::clamp(rung, 0, int(steps.size()) - 1))];
 }
 
 std::string inchText(double millimetres) {

@@ -33,6 +33,9 @@ std::optional<double> simplestAngle(double degrees, double uncertainty);
 /// none.
 int ladderRung(double value, UnitSystem units);
 
+/// The step of rung `rung` (as ladderRung() gives it), scan units.
+double ladderStep(int rung, UnitSystem units);
+
 /// A length of the inch grid as text, e.g. "1 1/4 in" for 31.75; empty when
 /// it is not on the 1/32 inch grid.
 std::string inchText(double millimetres);
