@@ -30,6 +30,9 @@ const char* const kAxisLetter[3] = {"x", "y", "z"};
 // faces lie, and how many of them at least.
 constexpr double kNearBand = 0.01;
 constexpr std::size_t kLeastOffsets = 3;
+// Caps of adding primitives that face each other this near (fraction of
+// the part's diagonal) meet (as tree.step's builder snaps them).
+constexpr double kMeetTolerance = 0.00125;
 // One value of the fitted tree before grouping.
 struct Slot {
   ValueCategory category = ValueCategory::Step;
@@ -122,6 +125,7 @@ class Designer {
     makeLeaves();
     if (reshape) findLeafPatterns();
     makeSlots();
+    if (reshape) joinMeetingCaps();
     groupSlots();
     prepare();
     if (reshape && !keepsShape()) {
@@ -401,6 +405,52 @@ class Designer {
       l.member = i;
     }
     d_.patterns.push_back(p);
+  }
+
+  // The slot an expression is, or -1 (a pattern's member is placed by
+  // several).
+  static int slotOf(const Expression& e) {
+    return e.terms.size() == 1 && e.terms.front().first == 1.0 ? e.terms.front().second : -1;
+  }
+
+  // Caps of two primitives that add material, facing each other across a
+  // gap narrower than kMeetTolerance of D with overlapping cross-sections
+  // (a shaft's chamfer cone and its body, fitted 0.07 apart), meet: both
+  // take their supports' weighted mean, so they become one parameter and
+  // the solid one piece (exact booleans, as FreeCAD's, leave the sliver
+  // between two solids).
+  void joinMeetingCaps() {
+    const double tol = kMeetTolerance * diagonal_;
+    for (std::size_t i = 0; i < d_.leaves.size(); ++i) {
+      const DesignedLeaf& a = d_.leaves[i];
+      if (a.cuts || a.pattern >= 0 || !meetsByCaps(a)) continue;
+      for (std::size_t j = 0; j < d_.leaves.size(); ++j) {
+        const DesignedLeaf& b = d_.leaves[j];
+        if (j == i || b.cuts || b.pattern >= 0 || !meetsByCaps(b)) continue;
+        for (int axis = 0; axis < 3; ++axis) {
+          const int top = slotOf(a.hi[std::size_t(axis)]), bottom = slotOf(b.lo[std::size_t(axis)]);
+          if (top < 0 || bottom < 0) continue;
+          Slot &t = slots_[std::size_t(top)], &u = slots_[std::size_t(bottom)];
+          const double gap = u.value - t.value;
+          if (!(gap > 0.0 && gap <= tol) || !crossSectionsOverlap(a, b, axis)) continue;
+          const double wt = t.support + 1.0, wu = u.support + 1.0;
+          t.value = u.value = (wt * t.value + wu * u.value) / (wt + wu);
+        }
+      }
+    }
+  }
+
+  static bool meetsByCaps(const DesignedLeaf& l) {
+    return l.form == LeafForm::AlignedBox ||
+           (l.form == LeafForm::Axial && l.type != PrimitiveType::Torus);
+  }
+
+  static bool crossSectionsOverlap(const DesignedLeaf& a, const DesignedLeaf& b, int axis) {
+    const Aabb x = a.local.bounds(), y = b.local.bounds();
+    for (int k = 0; k < 3; ++k) {
+      if (k != axis && (x.max[k] <= y.min[k] || y.max[k] <= x.min[k])) return false;
+    }
+    return true;
   }
 
   // Slots of one category within groupTolerance become one parameter.

@@ -25,9 +25,10 @@
 ///                points' mean distance to the tree grows by at most
 ///                fitnessSlack·σ (the costliest dropped until it does).
 ///
-/// Patterns (design/pattern_detection.h) are written as one member, a count
-/// and a step. The fitted tree's structure is kept: every leaf of it has a
-/// designed leaf.
+/// Caps of adding primitives that face each other across a sliver (at most
+/// 0.125 % of D) become one parameter. Patterns (design/pattern_detection.h)
+/// are written as one member, a count and a step. The fitted tree's structure is kept: every leaf
+/// of it has a designed leaf.
 
 #include <array>
 #include <span>
