@@ -430,11 +430,11 @@ class Designer {
         for (int axis = 0; axis < 3; ++axis) {
           const int top = slotOf(a.hi[std::size_t(axis)]), bottom = slotOf(b.lo[std::size_t(axis)]);
           if (top < 0 || bottom < 0) continue;
-          Slot &t = slots_[std::size_t(top)], &u = slots_[std::size_t(bottom)];
-          const double gap = u.value - t.value;
+          Slot &below = slots_[std::size_t(top)], &above = slots_[std::size_t(bottom)];
+          const double gap = above.value - below.value;
           if (!(gap > 0.0 && gap <= tol) || !crossSectionsOverlap(a, b, axis)) continue;
-          const double wt = t.support + 1.0, wu = u.support + 1.0;
-          t.value = u.value = (wt * t.value + wu * u.value) / (wt + wu);
+          const double w0 = below.support + 1.0, w1 = above.support + 1.0;
+          below.value = above.value = (w0 * below.value + w1 * above.value) / (w0 + w1);
         }
       }
     }
@@ -829,14 +829,18 @@ class Designer {
     for (int i : all) d_.parameters[std::size_t(i)].snapped = true;
   }
 
-  // Robust deviation of a sample: 1.4826 × its median absolute deviation.
-  static double spread(std::vector<double> v) {
+  // The median of a sample (the upper middle value).
+  static double median(std::vector<double> v) {
     const auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
-    const double m = *mid;
+    return *mid;
+  }
+
+  // Robust deviation of a sample: 1.4826 × its median absolute deviation.
+  static double spread(std::vector<double> v) {
+    const double m = median(v);
     for (double& x : v) x = std::abs(x - m);
-    std::nth_element(v.begin(), mid, v.end());
-    return 1.4826 * *mid;
+    return 1.4826 * median(std::move(v));
   }
 
   // The value parameter i's points imply: the fitted one, unless the points
@@ -846,12 +850,10 @@ class Designer {
   // where they lie.
   double refitted(int i) const {
     const DesignParameter& p = d_.parameters[std::size_t(i)];
-    std::vector<double> o = paramSlots_[std::size_t(i)].offsets;
+    const std::vector<double>& o = paramSlots_[std::size_t(i)].offsets;
     if (o.size() < kLeastOffsets || !std::isfinite(p.uncertainty)) return p.fitted;
-    const auto mid = o.begin() + std::ptrdiff_t(o.size() / 2);
-    std::nth_element(o.begin(), mid, o.end());
-    const double band = SupportOptions{}.band * d_.noise;
-    return std::abs(*mid) > std::max(p.uncertainty, band) ? p.fitted + *mid : p.fitted;
+    const double offset = median(o), band = SupportOptions{}.band * d_.noise;
+    return std::abs(offset) > std::max(p.uncertainty, band) ? p.fitted + offset : p.fitted;
   }
 
   // A length's snap that chance would rarely give: its uncertainty at most
@@ -1054,6 +1056,15 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
     return designTree(fitted, f, points, options);
   };
   if (!frame.spinFree) return refined(std::move(d), frame);
+  // The frame turned about its z by `phase` (radians), and the tree
+  // designed in it.
+  const auto turnedBy = [&](double phase) {
+    Mat3 spin = Mat3::Identity();
+    spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
+    frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);
+    frame.spinFree = false;
+    return refined(designTree(fitted, frame, points, options), frame);
+  };
   // A turned part: x through the first member of a bolt circle about the
   // main axis, so that a turned copy of the part gives the same values.
   const double tol = options.patternTolerance * exportExtent(fitted).diagonal();
@@ -1069,11 +1080,7 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
     }
     const double phase = fittedOf(p.phase) / kDeg;
     if (std::abs(phase) < 1e-12) return d;
-    Mat3 spin = Mat3::Identity();
-    spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
-    frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);
-    frame.spinFree = false;
-    return refined(designTree(fitted, frame, points, options), frame);
+    return turnedBy(phase);
   }
   // Without one, x along the first cylinder or cone across the main axis (a
   // radial hole or pin), pointing away from the axis: else the world's axes
@@ -1086,11 +1093,7 @@ DesignedTree designTree(const CsgTree& fitted, std::span<const Vec3> allPoints,
     if (axis.x() * center.x() + axis.y() * center.y() < 0.0) axis = -axis;
     const double phase = std::atan2(axis.y(), axis.x());
     if (std::abs(phase) < 1e-12) return refined(std::move(d), frame);
-    Mat3 spin = Mat3::Identity();
-    spin << std::cos(phase), -std::sin(phase), 0, std::sin(phase), std::cos(phase), 0, 0, 0, 1;
-    frame.rotation = nearestWorldAxes(frame.rotation * spin, options.frame.worldTolerance);
-    frame.spinFree = false;
-    return refined(designTree(fitted, frame, points, options), frame);
+    return turnedBy(phase);
   }
   return refined(std::move(d), frame);
 }
