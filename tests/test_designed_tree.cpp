@@ -333,8 +333,9 @@ TEST(DesignedTree, ConeTipRunsOnToItsApex) {
       {CsgTree::leaf(Box{Vec3(0, 0, 10), Mat3::Identity(), Vec3(10, 10, 10)}),
        CsgTree::leaf(Cone{Vec3(0, 0, 24.95), Vec3::UnitZ(), 5.0, 0.05, 9.9})});  // z 20..29.9
   const DesignedTree d = designTree(fitted, scanOf(truth, 0.5, 0.02, 4));
+  const CsgTree designed = d.tree();
   const Node* cone = nullptr;
-  for (const Node* leaf : d.tree().leaves()) {
+  for (const Node* leaf : designed.leaves()) {
     if (leaf->primitive.as<Cone>()) cone = leaf;
   }
   ASSERT_NE(cone, nullptr);
