@@ -46,6 +46,27 @@ std::string point(const Vec3& p) {
   return s.str();
 }
 
+// The start of one line of freecad_macro_check.py's results.
+struct MacroResult {
+  std::string name;
+  int solids = 0, valid = 0;
+  double volume = 0, stepVolume = 0;  // the macro's solid's and tree.step's
+};
+
+// Reads it from `in`, which is left at the rest of the line; false when
+// the line is short.
+bool readMacroResult(std::istringstream& in, MacroResult& r) {
+  in >> r.name >> r.solids >> r.valid >> r.volume >> r.stepVolume;
+  return bool(in);
+}
+
+// One valid solid within 0.1 % of tree.step's volume.
+void expectOneSolidLikeTheStep(const MacroResult& r) {
+  EXPECT_EQ(r.solids, 1);
+  EXPECT_EQ(r.valid, 1);
+  EXPECT_NEAR(r.volume / r.stepVolume, 1.0, 0.001);
+}
+
 TEST_F(FreecadMacro, BuildsEveryPartAndFollowsTheSheet) {
   if (!test::haveFreecad())
     GTEST_SKIP() << "freecadcmd not installed (scripts/install-deps.sh installs it)";
@@ -78,19 +99,15 @@ TEST_F(FreecadMacro, BuildsEveryPartAndFollowsTheSheet) {
   std::size_t done = 0;
   for (const std::string& line : lines) {
     std::istringstream in(line);
-    std::string name;
-    int solids = 0, valid = 0;
-    double volume = 0, stepVolume = 0;
-    in >> name >> solids >> valid >> volume >> stepVolume;
-    ASSERT_TRUE(in) << line;
-    SCOPED_TRACE(name);
+    MacroResult r;
+    ASSERT_TRUE(readMacroResult(in, r)) << line;
+    SCOPED_TRACE(r.name);
     ++done;
-    EXPECT_EQ(solids, 1);
-    EXPECT_EQ(valid, 1);
-    EXPECT_NEAR(volume / stepVolume, 1.0, 0.001);
-    std::printf("[ fcmacro ] %-18s %+.4f %% of tree.step's volume\n", name.c_str(),
-                100 * (volume / stepVolume - 1));
-    if (name == "flange") {
+    expectOneSolidLikeTheStep(r);
+    const double volume = r.volume;
+    std::printf("[ fcmacro ] %-18s %+.4f %% of tree.step's volume\n", r.name.c_str(),
+                100 * (volume / r.stepVolume - 1));
+    if (r.name == "flange") {
       double edited = 0;
       int p1Before = 0, p2Before = 0, p1After = 0, p2After = 0;
       in >> edited >> p1Before >> p2Before >> p1After >> p2After;
@@ -130,15 +147,10 @@ TEST_F(FreecadMacro, ScanDesignsAreOneSolid) {
   ASSERT_EQ(lines.size(), names.size());
   for (const std::string& line : lines) {
     std::istringstream in(line);
-    std::string name;
-    int solids = 0, valid = 0;
-    double volume = 0, stepVolume = 0;
-    in >> name >> solids >> valid >> volume >> stepVolume;
-    ASSERT_TRUE(in) << line;
-    SCOPED_TRACE(name);
-    EXPECT_EQ(solids, 1);
-    EXPECT_EQ(valid, 1);
-    EXPECT_NEAR(volume / stepVolume, 1.0, 0.001);
+    MacroResult r;
+    ASSERT_TRUE(readMacroResult(in, r)) << line;
+    SCOPED_TRACE(r.name);
+    expectOneSolidLikeTheStep(r);
   }
 }
 
