@@ -8,4 +8,16 @@ Aabb PointCloud::bounds() const {
   return b;
 }
 
+PointCloud PointCloud::subset(std::span<const std::uint32_t> indices) const {
+  PointCloud out;
+  const bool withNormals = hasNormals();
+  out.points.reserve(indices.size());
+  if (withNormals) out.normals.reserve(indices.size());
+  for (std::uint32_t i : indices) {
+    out.points.push_back(points[i]);
+    if (withNormals) out.normals.push_back(normals[i]);
+  }
+  return out;
+}
+
 }  // namespace csgvox

@@ -2,6 +2,8 @@
 /// A scan: points with (optional) unit outward normals.
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/geometry.h"
@@ -22,6 +24,9 @@ struct PointCloud {
   /// Length of the bounding-box diagonal, D: the scale every relative
   /// parameter refers to.
   double diagonal() const { return bounds().diagonal(); }
+  /// The points at `indices` (each less than size()), in that order, with
+  /// their normals when the cloud has them.
+  PointCloud subset(std::span<const std::uint32_t> indices) const;
 };
 
 }  // namespace csgvox

@@ -150,6 +150,11 @@ struct Reconstruction {
   int resolution = 0;             ///< the grid's (finer than asked when the part is thin)
   std::vector<ThinFeature> thin;  ///< features thinner than two voxels at the asked resolution
   std::size_t holesFromRims = 0;  ///< hole cylinders found from their rims (raw scans)
+  /// Points the labels, the optimisation and the repair worked on: all of
+  /// the scan's, or, for a scan larger than the detection's search
+  /// (DetectOptions::ransacPoints), the even subsample detection searched
+  /// (the genetic baseline keeps all). Count.
+  std::size_t pointsAfterDetection = 0;
   BoreOpening boreOpening;        ///< inside labels turned outside in the bores seen
   VoxelLabels labels;
   Method method = Method::Voxel;   ///< the method asked for

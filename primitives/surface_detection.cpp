@@ -657,7 +657,7 @@ std::vector<Stage> ransacStages(const DetectOptions& options, std::size_t minPoi
 // to the surface that explains it best, re-fits. `subset` becomes the
 // unassigned points, which later stages search.
 void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surface>& found,
-            std::vector<std::uint32_t>& subset) {
+            std::vector<std::uint32_t>& subset, FitMemo& memo) {
   result.surfaces = std::move(found);
   result.status = DetectionResult::Status::Ok;
   SurfaceFitOptions settle;
@@ -670,7 +670,7 @@ void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surfac
   // turns the flattened ones into planes and splits stepped cylinders.
   settle.flattenToPlanes = false;
   settle.splitSteps = false;
-  fitSurfaces(cloud, result, settle);
+  fitSurfaces(cloud, result, settle, &memo);
   found = std::move(result.surfaces);
   result.surfaces.clear();
   subset.clear();
@@ -830,6 +830,9 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
   const std::optional<NearestNeighbors> nn =
       options.estimatedNormals ? std::optional<NearestNeighbors>(cloud.points) : std::nullopt;
   std::vector<Surface> found;
+  // The stages settle the surfaces found so far again after each pass, most
+  // of them unchanged: their fits are looked up.
+  FitMemo fits(cloud);
   std::vector<std::uint32_t> subset(cloud.size());
   for (std::size_t i = 0; i < subset.size(); ++i) subset[i] = std::uint32_t(i);
   for (std::size_t stage = 0; stage < stages.size(); ++stage) {
@@ -858,7 +861,7 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
       }
     }
     result.minPoints = std::min(result.minPoints, stages[stage].minPoints);
-    settle(cloud, result, found, subset);
+    settle(cloud, result, found, subset, fits);
     if (options.estimatedNormals) {
       dropExplainedLeftovers(cloud, *nn, found, result.assignment, result.epsilon, subset);
     }
@@ -903,13 +906,7 @@ DetectionResult detectOnSubsample(const PointCloud& cloud, const DetectOptions& 
   so.points = options.ransacPoints;
   so.seed = mixSeed(options.seed, kSubsampleStream);
   const std::vector<std::uint32_t> chosen = evenSubsample(cloud.points, noise, so);
-  PointCloud sub;
-  sub.points.reserve(chosen.size());
-  sub.normals.reserve(chosen.size());
-  for (std::uint32_t i : chosen) {
-    sub.points.push_back(cloud.points[i]);
-    sub.normals.push_back(cloud.normals[i]);
-  }
+  const PointCloud sub = cloud.subset(chosen);
   const auto scaled = [&](double f, std::string_view stage) {
     return !progress || progress(0.95 * f, stage);
   };
@@ -917,6 +914,7 @@ DetectionResult detectOnSubsample(const PointCloud& cloud, const DetectOptions& 
   // The decisions that depend on the density are taken on the subsample.
   if (result.ok()) fitSurfaces(sub, result);
   result.searchedPoints = sub.size();
+  result.searched = chosen;
   result.diagonal = diag;
   result.assignment.assign(cloud.size(), -1);
   for (Surface& s : result.surfaces) s.inliers.clear();

@@ -89,6 +89,10 @@ struct DetectionResult {
   /// a scan of more than DetectOptions::ransacPoints (then the surfaces are
   /// fitted, split and pruned there, see detectSurfaces).
   std::size_t searchedPoints = 0;
+  /// The even subsample's point indices, ascending, when RANSAC searched one
+  /// (empty when it searched all points). The stages after detection work on
+  /// these points too (see reconstruct).
+  std::vector<std::uint32_t> searched;
 
   /// True when status is Ok.
   bool ok() const { return status == Status::Ok; }

@@ -49,7 +49,8 @@ bool flattened(const Surface& s, double diag) {
 // Fits every surface on its inliers (in parallel); surfaces whose fit
 // degenerates keep their parameters, and (options.flattenToPlanes) a curved
 // surface whose fit has flattened becomes the plane of its inliers.
-void fitAll(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOptions& options) {
+void fitAll(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOptions& options,
+            FitMemo& memo) {
   const FitScales scales = fitScales(result, options);
   const double diag = result.diagonal;
   // One task per surface: the fits differ widely in cost (largest surfaces first).
@@ -59,12 +60,12 @@ void fitAll(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOp
         for (std::size_t s = range.begin(); s != range.end(); ++s) {
           Surface& surf = result.surfaces[s];
           Surface trial = surf;
-          if (fitSurface(cloud, surf.inliers, trial, scales, options) >= 0.0)
+          if (fitSurface(cloud, surf.inliers, trial, scales, options, &memo) >= 0.0)
             surf = std::move(trial);
           Surface plane;
           if (options.flattenToPlanes && diag > 0.0 && flattened(surf, diag) &&
               initialSurface(cloud, surf.inliers, SurfaceType::Plane, plane) &&
-              fitSurface(cloud, surf.inliers, plane, scales, options) >= 0.0) {
+              fitSurface(cloud, surf.inliers, plane, scales, options, &memo) >= 0.0) {
             plane.inliers = std::move(surf.inliers);
             surf = std::move(plane);
           }
@@ -100,7 +101,8 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
                                                             const Surface& surf,
                                                             std::size_t minPoints, double overlap,
                                                             const FitScales& scales,
-                                                            const SurfaceFitOptions& options) {
+                                                            const SurfaceFitOptions& options,
+                                                            FitMemo& memo) {
   const std::size_t n = surf.inliers.size();
   if (!nearCylinder(surf) || n < 2 * minPoints) return std::nullopt;
   const double rms = rmsDistance(cloud, surf.inliers, surf);
@@ -157,7 +159,7 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
     std::sort(indices.begin(), indices.end());
     Surface& part = parts[side];
     if (!initialSurface(cloud, indices, SurfaceType::Cylinder, part)) return std::nullopt;
-    const double partRms = fitSurface(cloud, indices, part, scales, options);
+    const double partRms = fitSurface(cloud, indices, part, scales, options, &memo);
     if (!(partRms >= 0.0)) return std::nullopt;
     partsSquared += partRms * partRms * double(indices.size());
     part.inliers = std::move(indices);
@@ -171,8 +173,8 @@ std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cl
 // (steppedCylinders) by the two, the inner one first; a part is split again
 // if it is itself stepped. The assignment is left to the reassignment and
 // the final bookkeeping of fitSurfaces, which rebuild it.
-void splitSteps(const PointCloud& cloud, DetectionResult& result,
-                const SurfaceFitOptions& options) {
+void splitSteps(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOptions& options,
+                FitMemo& memo) {
   const FitScales scales = fitScales(result, options);
   const std::size_t minPoints = std::max<std::size_t>(1, result.minPoints);
   std::vector<Surface> pending(std::make_move_iterator(result.surfaces.rbegin()),
@@ -181,7 +183,8 @@ void splitSteps(const PointCloud& cloud, DetectionResult& result,
   while (!pending.empty()) {
     Surface surf = std::move(pending.back());
     pending.pop_back();
-    if (auto parts = steppedCylinders(cloud, surf, minPoints, result.epsilon, scales, options)) {
+    if (auto parts =
+            steppedCylinders(cloud, surf, minPoints, result.epsilon, scales, options, memo)) {
       pending.push_back(std::move(parts->second));
       pending.push_back(std::move(parts->first));
     } else {
@@ -310,7 +313,7 @@ void sortBySize(DetectionResult& result) {
 }  // namespace
 
 void fitSurfaces(const PointCloud& cloud, DetectionResult& result,
-                 const SurfaceFitOptions& options) {
+                 const SurfaceFitOptions& options, FitMemo* memo) {
   if (result.assignment.size() != cloud.size()) {
     throw std::invalid_argument("fitSurfaces: the detection result belongs to another cloud");
   }
@@ -319,13 +322,18 @@ void fitSurfaces(const PointCloud& cloud, DetectionResult& result,
   if (!(result.epsilon > 0.0)) {
     throw std::invalid_argument("fitSurfaces: the detection result has no epsilon");
   }
-  fitAll(cloud, result, options);
+  if (memo != nullptr && &memo->cloud() != &cloud) {
+    throw std::invalid_argument("fitSurfaces: the memo belongs to another cloud");
+  }
+  std::optional<FitMemo> own;
+  FitMemo& fits = memo != nullptr ? *memo : own.emplace(cloud);
+  fitAll(cloud, result, options, fits);
   if (options.removeRedundant) removeRedundant(cloud, result, options);
-  if (options.splitSteps) splitSteps(cloud, result, options);
+  if (options.splitSteps) splitSteps(cloud, result, options, fits);
   if (options.reassign) {
     reassignPoints(cloud, result, std::max<std::size_t>(1, result.minPoints),
                    options.connectedPatches);
-    fitAll(cloud, result, options);
+    fitAll(cloud, result, options, fits);
   }
   // Final bookkeeping: rms and centroids on the final inliers.
   result.centroids.assign(result.surfaces.size(), Vec3::Zero());

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 
 #include "core/point_cloud.h"
@@ -75,6 +76,34 @@ bool pointOnSurface(const Surface& surface, const Vec3& p, const Vec3& n, const 
 /// false), loss options.lossScale x result.epsilon.
 FitScales fitScales(const DetectionResult& result, const SurfaceFitOptions& options = {});
 
+/// Fits made on one cloud, kept so that a fit asked for again is looked up
+/// instead of solved: a fit is a function of its points, its start, its
+/// scales and its options alone, so the answer is the same, bit for bit.
+/// Detection settles its surfaces after every RANSAC stage, and a surface
+/// whose inliers did not change is fitted again from where its last fit
+/// ended (about a third of the fitting time of a 100k-point scan).
+/// Thread-safe; belongs to one cloud (its points and normals unchanged
+/// while it is used).
+class FitMemo {
+ public:
+  explicit FitMemo(const PointCloud& cloud);
+  ~FitMemo();
+  FitMemo(const FitMemo&) = delete;
+  FitMemo& operator=(const FitMemo&) = delete;
+
+  const PointCloud& cloud() const { return cloud_; }
+  /// Fits looked up, and fits solved and kept (counts).
+  std::size_t hits() const;
+  std::size_t solved() const;
+
+ private:
+  friend double fitSurface(const PointCloud&, std::span<const std::uint32_t>, Surface&,
+                           const FitScales&, const SurfaceFitOptions&, FitMemo*);
+  struct Store;
+  const PointCloud& cloud_;
+  std::unique_ptr<Store> store_;
+};
+
 /// Fits `surface` (type and start parameters as given) to the points
 /// `indices` of the cloud: robust (Huber) least squares of their orthogonal
 /// distances and, optionally, of their normals' deviation. Unit vectors stay
@@ -82,11 +111,14 @@ FitScales fitScales(const DetectionResult& result, const SurfaceFitOptions& opti
 /// the points' normals. Returns the RMS orthogonal distance of the points to
 /// the fitted surface, or a negative number (leaving `surface` unchanged)
 /// when the fit degenerates (for example a torus whose tube radius exceeds its
-/// ring radius). Does not change surface.inliers.
+/// ring radius). Does not change surface.inliers. With a `memo` (of this
+/// cloud), a fit it holds is looked up and a new one kept.
 /// @throw std::invalid_argument when scales.position or scales.loss is not
-///        positive or scales.normal is negative.
+///        positive or scales.normal is negative, or the memo belongs to
+///        another cloud.
 double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
-                  const FitScales& scales, const SurfaceFitOptions& options = {});
+                  const FitScales& scales, const SurfaceFitOptions& options = {},
+                  FitMemo* memo = nullptr);
 
 /// A closed-form start for a surface of the given type on the points
 /// `indices` and their normals, to be polished with fitSurface: PCA plane;
@@ -132,10 +164,12 @@ void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_
 /// re-assigns the points (reassignPoints), re-fits once and sets each
 /// surface's rms and centroid.
 /// Surfaces stay sorted by inlier count. A result without surfaces is left
-/// as it is.
+/// as it is. Its fits go through `memo` (of this cloud) when one is given,
+/// else through one of its own.
 /// @throw std::invalid_argument when result.assignment does not match the
-///        cloud, or the cloud has no normals.
+///        cloud, or the cloud has no normals, or the memo belongs to another
+///        cloud.
 void fitSurfaces(const PointCloud& cloud, DetectionResult& result,
-                 const SurfaceFitOptions& options = {});
+                 const SurfaceFitOptions& options = {}, FitMemo* memo = nullptr);
 
 }  // namespace csgvox

@@ -12,9 +12,12 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
+#include <unordered_map>
 #include <variant>
 #include <vector>
 
@@ -564,11 +567,137 @@ FitScales fitScales(const DetectionResult& result, const SurfaceFitOptions& opti
   return scales;
 }
 
+// One fit a memo holds: what it was asked (start, points, scales,
+// options) and what it gave.
+struct FitMemo::Store {
+  struct Entry {
+    SurfaceShape start;
+    std::vector<std::uint32_t> indices;
+    FitScales scales;
+    std::size_t maxFitPoints = 0;
+    int maxIterations = 0;
+    double rms = -1.0;  // negative: the fit degenerated, the start stays
+    SurfaceShape shape;
+    bool convex = true;
+  };
+  std::mutex mutex;
+  std::unordered_map<std::uint64_t, std::vector<Entry>> entries;
+  std::size_t hits = 0, solved = 0;
+};
+
+FitMemo::FitMemo(const PointCloud& cloud) : cloud_(cloud), store_(std::make_unique<Store>()) {}
+FitMemo::~FitMemo() = default;
+
+std::size_t FitMemo::hits() const {
+  const std::lock_guard lock(store_->mutex);
+  return store_->hits;
+}
+
+std::size_t FitMemo::solved() const {
+  const std::lock_guard lock(store_->mutex);
+  return store_->solved;
+}
+
+namespace {
+
+// Bit-for-bit equality of two shapes (the memo's question is "the same
+// start?", so -0 and +0 differ too).
+bool sameShape(const SurfaceShape& a, const SurfaceShape& b) {
+  if (a.index() != b.index()) return false;
+  return std::visit(
+      [&](const auto& x) {
+        using T = std::decay_t<decltype(x)>;
+        return std::memcmp(&x, &std::get<T>(b), sizeof(T)) == 0;
+      },
+      a);
+}
+
+bool sameScales(const FitScales& a, const FitScales& b) {
+  return a.position == b.position && a.normal == b.normal && a.loss == b.loss;
+}
+
+// FNV-1a over the bytes of the start, the points' indices and the scales.
+std::uint64_t fitKey(const SurfaceShape& start, std::span<const std::uint32_t> indices,
+                     const FitScales& scales) {
+  std::uint64_t h = 14695981039346656037ull;
+  const auto mix = [&h](const void* data, std::size_t bytes) {
+    const auto* c = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < bytes; ++k) h = (h ^ c[k]) * 1099511628211ull;
+  };
+  const std::size_t type = start.index();
+  mix(&type, sizeof(type));
+  std::visit([&](const auto& x) { mix(&x, sizeof(x)); }, start);
+  const std::size_t n = indices.size();
+  mix(&n, sizeof(n));
+  mix(indices.data(), indices.size_bytes());
+  mix(&scales.position, sizeof(double));
+  mix(&scales.normal, sizeof(double));
+  mix(&scales.loss, sizeof(double));
+  return h;
+}
+
+// The fit itself (fitSurface without its memo).
+double solveFit(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
+                const FitScales& scales, const SurfaceFitOptions& options);
+
+}  // namespace
+
 double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
-                  const FitScales& scales, const SurfaceFitOptions& options) {
+                  const FitScales& scales, const SurfaceFitOptions& options, FitMemo* memo) {
   if (!(scales.position > 0.0) || !(scales.loss > 0.0) || !(scales.normal >= 0.0)) {
     throw std::invalid_argument("fitSurface: scales must be positive");
   }
+  if (memo == nullptr) return solveFit(cloud, indices, surface, scales, options);
+  if (&memo->cloud() != &cloud) {
+    throw std::invalid_argument("fitSurface: the memo belongs to another cloud");
+  }
+  using Entry = FitMemo::Store::Entry;
+  FitMemo::Store& store = *memo->store_;
+  const std::uint64_t key = fitKey(surface.shape, indices, scales);
+  const auto matches = [&](const Entry& e) {
+    return e.maxFitPoints == options.maxFitPoints && e.maxIterations == options.maxIterations &&
+           sameScales(e.scales, scales) && sameShape(e.start, surface.shape) &&
+           std::equal(e.indices.begin(), e.indices.end(), indices.begin(), indices.end());
+  };
+  {
+    const std::lock_guard lock(store.mutex);
+    if (const auto it = store.entries.find(key); it != store.entries.end()) {
+      for (const Entry& e : it->second) {
+        if (!matches(e)) continue;
+        ++store.hits;
+        if (e.rms >= 0.0) {
+          surface.shape = e.shape;
+          surface.convex = e.convex;
+          surface.rms = e.rms;
+        }
+        return e.rms;
+      }
+    }
+  }
+  Entry entry{surface.shape,
+              std::vector<std::uint32_t>(indices.begin(), indices.end()),
+              scales,
+              options.maxFitPoints,
+              options.maxIterations,
+              -1.0,
+              {},
+              true};
+  const double rms = solveFit(cloud, indices, surface, scales, options);
+  entry.rms = rms;
+  if (rms >= 0.0) {
+    entry.shape = surface.shape;
+    entry.convex = surface.convex;
+  }
+  const std::lock_guard lock(store.mutex);
+  ++store.solved;
+  store.entries[key].push_back(std::move(entry));
+  return rms;
+}
+
+namespace {
+
+double solveFit(const PointCloud& cloud, std::span<const std::uint32_t> indices, Surface& surface,
+                const FitScales& scales, const SurfaceFitOptions& options) {
   const std::vector<std::uint32_t> pts =
       evenSubset(indices, std::max<std::size_t>(16, options.maxFitPoints));
   if (pts.size() < 4) return -1.0;
@@ -598,5 +727,7 @@ double fitSurface(const PointCloud& cloud, std::span<const std::uint32_t> indice
   surface = std::move(out);
   return rms;
 }
+
+}  // namespace
 
 }  // namespace csgvox

@@ -16,6 +16,7 @@
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "mesh/fit_metrics.h"
+#include "mesh/surface_sampler.h"
 #include "part_list.h"
 #include "pipeline/reconstruct.h"
 #include "test_helpers.h"
@@ -144,6 +145,35 @@ TEST(Reconstruction, SameTreeAtOneAndTwoThreadsWhenDetectionSearchesASubsample) 
   ReconstructOptions o;
   o.detect.ransacPoints = 4000;  // of the scan's 10 000 points
   EXPECT_EQ(treeAtThreads(scan.cloud, o, 1), treeAtThreads(scan.cloud, o, 2));
+}
+
+// A scan larger than the detection's search gives the tree of the even
+// subsample detection searched: the stages after detection work on those
+// points (in their time), with the surfaces fitted on every point.
+TEST(Reconstruction, ABigScanGivesTheTreeOfItsSubsample) {
+  const CsgTree truth = readTreeJson(test::dataDir() / "housing_complex" / "tree.json");
+  SampleOptions so;
+  so.points = 40000;
+  so.seed = 3;
+  const PointCloud big = sampleSurface(truth, so).cloud;
+  ReconstructOptions o;
+  o.detect.ransacPoints = 10000;
+  const Reconstruction whole = reconstruct(big, o);
+  ASSERT_TRUE(whole.ok()) << whole.message;
+  ASSERT_FALSE(whole.detection.searched.empty());
+  EXPECT_EQ(whole.pointsAfterDetection, whole.detection.searched.size());
+  EXPECT_NEAR(double(whole.pointsAfterDetection), 10000.0, 1000.0);
+  EXPECT_GE(test::treeIou(whole.tree, truth), 0.99);
+  EXPECT_LE(whole.tree.primitiveCount(), truth.primitiveCount() + 2);
+  // The subsample alone, searched whole.
+  ReconstructOptions all = o;
+  all.detect.ransacPoints = 0;
+  const Reconstruction sub = reconstruct(big.subset(whole.detection.searched), all);
+  ASSERT_TRUE(sub.ok()) << sub.message;
+  EXPECT_TRUE(sub.detection.searched.empty());
+  EXPECT_EQ(sub.pointsAfterDetection, whole.pointsAfterDetection);
+  EXPECT_EQ(whole.tree.primitiveCount(), sub.tree.primitiveCount());
+  EXPECT_GE(test::treeIou(whole.tree, sub.tree), 0.998);
 }
 
 TEST(Reconstruction, ReportsEveryStageInOrder) {

@@ -722,6 +722,71 @@ TEST(SurfaceDetection, SameSeedSameResult) {
   EXPECT_EQ(ra.summary(), rb.summary());
 }
 
+// A fit asked again of a memo is looked up, bit for bit what solving it
+// gives; a new start or other points are solved.
+TEST(SurfaceFit, AMemoAnswersARepeatedFitAsSolvingIt) {
+  const Scan scan = readScan(dataDir() / "bearing_housing" / "scan_noisy.ply");
+  const DetectionResult detected = detectSurfaces(scan.cloud);
+  ASSERT_TRUE(detected.ok()) << detected.message;
+  const FitScales scales = fitScales(detected);
+  FitMemo memo(scan.cloud);
+  const std::size_t n = detected.surfaces.size();
+  for (int round = 0; round < 2; ++round) {
+    for (const Surface& start : detected.surfaces) {
+      Surface solved = start, looked = start;
+      const double a = fitSurface(scan.cloud, start.inliers, solved, scales);
+      const double b = fitSurface(scan.cloud, start.inliers, looked, scales, {}, &memo);
+      EXPECT_EQ(a, b);
+      EXPECT_EQ(parameters(solved), parameters(looked)) << describe(start);
+      EXPECT_EQ(solved.convex, looked.convex);
+      EXPECT_EQ(solved.rms, looked.rms);
+    }
+  }
+  EXPECT_EQ(memo.solved(), n);
+  EXPECT_EQ(memo.hits(), n);
+  // Another start, other points, other options: solved anew.
+  Surface moved = detected.surfaces.front();
+  if (auto* p = std::get_if<PlaneSurface>(&moved.shape)) p->offset += 1e-9;
+  if (auto* c = std::get_if<CylinderSurface>(&moved.shape)) c->radius += 1e-9;
+  if (auto* c = std::get_if<ConeSurface>(&moved.shape)) c->halfAngle += 1e-9;
+  if (auto* c = std::get_if<SphereSurface>(&moved.shape)) c->radius += 1e-9;
+  if (auto* t = std::get_if<TorusSurface>(&moved.shape)) t->minorRadius += 1e-9;
+  fitSurface(scan.cloud, moved.inliers, moved, scales, {}, &memo);
+  const Surface& first = detected.surfaces.front();
+  Surface fewer = first;
+  const std::vector<std::uint32_t> half(first.inliers.begin(),
+                                        first.inliers.begin() + first.inliers.size() / 2);
+  fitSurface(scan.cloud, half, fewer, scales, {}, &memo);
+  Surface coarser = first;
+  SurfaceFitOptions fo;
+  fo.maxFitPoints = 100;
+  fitSurface(scan.cloud, first.inliers, coarser, scales, fo, &memo);
+  EXPECT_EQ(memo.solved(), n + 3);
+  EXPECT_EQ(memo.hits(), n);
+  // A memo belongs to one cloud.
+  const PointCloud copy = scan.cloud;
+  Surface other = first;
+  EXPECT_THROW(fitSurface(copy, first.inliers, other, scales, {}, &memo), std::invalid_argument);
+}
+
+// Detection settles its surfaces after every stage through one memo; the
+// result is the one every fit solved gives (here: the memo shared by two
+// fitSurfaces runs, against a run without one).
+TEST(SurfaceFit, FitsThroughAMemoGiveTheSameSurfaces) {
+  const Scan scan = readScan(dataDir() / "housing_complex" / "scan_noisy.ply");
+  const DetectionResult detected = detectSurfaces(scan.cloud);
+  ASSERT_TRUE(detected.ok()) << detected.message;
+  DetectionResult plain = detected, once = detected, twice = detected;
+  fitSurfaces(scan.cloud, plain);
+  FitMemo memo(scan.cloud);
+  fitSurfaces(scan.cloud, once, {}, &memo);
+  const std::size_t hitsOnce = memo.hits();
+  fitSurfaces(scan.cloud, twice, {}, &memo);
+  EXPECT_TRUE(sameSurfaces(plain, once));
+  EXPECT_TRUE(sameSurfaces(plain, twice));
+  EXPECT_GT(memo.hits(), hitsOnce + detected.surfaces.size() / 2);
+}
+
 TEST(SurfaceDetection, ASearchOnASubsampleAssignsEveryPoint) {
   const Scan scan = readScan(dataDir() / "housing_complex" / "scan.ply");
   DetectOptions o;
