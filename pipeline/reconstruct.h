@@ -155,7 +155,7 @@ struct Reconstruction {
   /// (DetectOptions::ransacPoints), the even subsample detection searched
   /// (the genetic baseline keeps all). Count.
   std::size_t pointsAfterDetection = 0;
-  BoreOpening boreOpening;        ///< inside labels turned outside in the bores seen
+  BoreOpening boreOpening;  ///< inside labels turned outside in the bores seen
   VoxelLabels labels;
   Method method = Method::Voxel;   ///< the method asked for
   MethodResult result;             ///< the method's own result (monostate when none ran)

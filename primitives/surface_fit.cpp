@@ -97,12 +97,9 @@ bool nearCylinder(const Surface& s) {
 // along the axis (their axial spans share at most `overlap`), and the two
 // sides fit cylinders with at most half the whole's RMS distance.
 constexpr double kStepGap = 1.5;
-std::optional<std::pair<Surface, Surface>> steppedCylinders(const PointCloud& cloud,
-                                                            const Surface& surf,
-                                                            std::size_t minPoints, double overlap,
-                                                            const FitScales& scales,
-                                                            const SurfaceFitOptions& options,
-                                                            FitMemo& memo) {
+std::optional<std::pair<Surface, Surface>> steppedCylinders(
+    const PointCloud& cloud, const Surface& surf, std::size_t minPoints, double overlap,
+    const FitScales& scales, const SurfaceFitOptions& options, FitMemo& memo) {
   const std::size_t n = surf.inliers.size();
   if (!nearCylinder(surf) || n < 2 * minPoints) return std::nullopt;
   const double rms = rmsDistance(cloud, surf.inliers, surf);
@@ -312,8 +309,8 @@ void sortBySize(DetectionResult& result) {
 
 }  // namespace
 
-void fitSurfaces(const PointCloud& cloud, DetectionResult& result,
-                 const SurfaceFitOptions& options, FitMemo* memo) {
+void fitSurfaces(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOptions& options,
+                 FitMemo* memo) {
   if (result.assignment.size() != cloud.size()) {
     throw std::invalid_argument("fitSurfaces: the detection result belongs to another cloud");
   }
