@@ -163,6 +163,12 @@ TEST(Reconstruction, ABigScanGivesTheTreeOfItsSubsample) {
   ASSERT_FALSE(whole.detection.searched.empty());
   EXPECT_EQ(whole.pointsAfterDetection, whole.detection.searched.size());
   EXPECT_NEAR(double(whole.pointsAfterDetection), 10000.0, 1000.0);
+  // The repair's fitness sums one term of at most 1 per point it worked on,
+  // nearly 1 for points on the tree: on every point it would be about 4x.
+  const auto* hybrid = whole.resultAs<HybridMethodResult>();
+  ASSERT_NE(hybrid, nullptr);
+  EXPECT_LE(hybrid->repair.before.distanceTerm, double(whole.pointsAfterDetection));
+  EXPECT_GE(hybrid->repair.before.distanceTerm, 0.9 * double(whole.pointsAfterDetection));
   EXPECT_GE(test::treeIou(whole.tree, truth), 0.99);
   EXPECT_LE(whole.tree.primitiveCount(), truth.primitiveCount() + 2);
   // The subsample alone, searched whole.
