@@ -304,6 +304,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     res.status = statusName(rec.status);
     res.note = scanNote + rec.message;
     if (rec.resolution != opt.resolution) res.note += ", res " + std::to_string(rec.resolution);
+    if (rec.boresFromWalls > 0) {
+      res.note += ", " + std::to_string(rec.boresFromWalls) + " bores from their walls";
+    }
     if (rec.holesFromRims > 0) {
       res.note += ", " + std::to_string(rec.holesFromRims) + " holes from their rims";
     }

@@ -155,6 +155,15 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   SurfaceFitOptions fit;
   if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = false;
   fitSurfaces(scan, out.detection, fit);
+  if (options.wallBores && options.detect.estimatedNormals) {
+    WallBoreOptions wo = options.wallBoreOptions;
+    wo.seed = options.seed;
+    out.wallBores = addWallBores(scan, out.detection, wo);
+    if (out.wallBores.bores > 0) {
+      out.detection.message += "; " + std::to_string(out.wallBores.bores) + " bore" +
+                               (out.wallBores.bores == 1 ? "" : "s") + " found from their walls";
+    }
+  }
   if (options.rimHoles && options.detect.estimatedNormals) {
     out.rimHoles = addRimHoles(scan, out.detection, options.rimHoleOptions);
     if (out.rimHoles.holes > 0) {

@@ -17,6 +17,7 @@
 #include "primitives/rim_holes.h"
 #include "primitives/surface_detection.h"
 #include "primitives/thin_features.h"
+#include "primitives/wall_bores.h"
 #include "voxel/voxel_grid.h"
 
 namespace csgvox {
@@ -60,6 +61,11 @@ struct DetectAndFitOptions {
   /// wall, and the face around it shows the hole.
   bool rimHoles = true;
   RimHoleOptions rimHoleOptions;  ///< their parameters
+  /// With normals estimated from raw points, the points no surface took are
+  /// searched for the walls of bores and bosses along the part's directions
+  /// (addWallBores; before the rims): RANSAC overlooks many small ones.
+  bool wallBores = true;
+  WallBoreOptions wallBoreOptions;  ///< their parameters (the seed is the job's)
 };
 
 /// Bytes the voxel stage needs for `candidates` on `voxels` (the
@@ -75,6 +81,7 @@ struct SurfacesAndCandidates {
   int resolution = 0;                   ///< the grid's resolution (finer than asked when thin)
   std::vector<ThinFeature> thin;        ///< features thinner than thinVoxels at the asked one
   RimHoleStats rimHoles;                ///< holes found from their rims (rimHoles)
+  WallBoreStats wallBores;              ///< bores found from their walls (wallBores)
   double detectSeconds = 0.0;           ///< RANSAC
   double fitSeconds = 0.0;              ///< the surface fit (Ceres)
   double regularizeSeconds = 0.0;       ///< regularisation

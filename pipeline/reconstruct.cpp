@@ -250,6 +250,7 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.resolution = found.resolution;
   out.thin = std::move(found.thin);
   out.holesFromRims = found.rimHoles.holes;
+  out.boresFromWalls = found.wallBores.bores;
   out.timeLimitHit = control.pastDeadline();
   if (!fitsInMemory(out, options)) return out;
   if (control.cancelled()) return cancelledAfter(std::move(out), "hypotheses");

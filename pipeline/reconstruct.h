@@ -147,9 +147,10 @@ struct Reconstruction {
   DetectionResult detection;
   HypothesisSet hypotheses;
   VoxelGrid grid;
-  int resolution = 0;             ///< the grid's (finer than asked when the part is thin)
-  std::vector<ThinFeature> thin;  ///< features thinner than two voxels at the asked resolution
-  std::size_t holesFromRims = 0;  ///< hole cylinders found from their rims (raw scans)
+  int resolution = 0;              ///< the grid's (finer than asked when the part is thin)
+  std::vector<ThinFeature> thin;   ///< features thinner than two voxels at the asked resolution
+  std::size_t holesFromRims = 0;   ///< hole cylinders found from their rims (raw scans)
+  std::size_t boresFromWalls = 0;  ///< bore and boss cylinders found from their walls (raw scans)
   /// Points the labels, the optimisation and the repair worked on: all of
   /// the scan's, or, for a scan larger than the detection's search
   /// (DetectOptions::ransacPoints), the even subsample detection searched

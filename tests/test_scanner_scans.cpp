@@ -32,13 +32,6 @@ const std::vector<KnownGap> kKnownGaps = {
      "IoU 0.993, 15 primitives for 11; not yet analysed (0.717 when 40 % of the spherical "
      "seat's normals pointed inward and the tree filled the bore, before undecided patches "
      "took their decided neighbours' side)"},
-    {"countersunk_plate", 0.91,
-     "IoU 0.970 (0.9699), 8 of 12 primitives (one hole found from its rim; 0.967 and 7 "
-     "without); its holes' walls are seen all around, so no bore is opened (0.9717 when the seen "
-     "stretches were opened too)"},
-    {"housing_complex", 0.89,
-     "IoU 0.945, 13 of 17 primitives (two holes found from their rims; 0.927 and 11 "
-     "without); the rest not yet analysed"},
     {"knob", 0.91,
      "IoU 0.961, 9 primitives for 6: the labels fill the D-shaped bore (2/3 of a circle, its "
      "flat's points inside the disc, so the bore opening leaves it to the winding number) and "
