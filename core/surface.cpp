@@ -5,6 +5,23 @@
 
 namespace csgvox {
 
+std::optional<Vec3> surfaceDirection(const Surface& surface) {
+  Vec3 d;
+  if (const auto* p = surface.as<PlaneSurface>()) {
+    d = p->normal;
+  } else if (const auto* c = surface.as<CylinderSurface>()) {
+    d = c->axisDir;
+  } else if (const auto* k = surface.as<ConeSurface>()) {
+    d = k->axisDir;
+  } else if (const auto* t = surface.as<TorusSurface>()) {
+    d = t->axisDir;
+  } else {
+    return std::nullopt;
+  }
+  if (!(d.norm() > 0.0)) return std::nullopt;
+  return d.normalized();
+}
+
 double surfaceDistance(const Surface& surface, const Vec3& p) {
   switch (surface.type()) {
     case SurfaceType::Plane: {

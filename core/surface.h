@@ -3,6 +3,7 @@
 /// cylinders, cones, spheres, tori), each with the scan points it explains.
 
 #include <cstdint>
+#include <optional>
 #include <string_view>
 #include <variant>
 #include <vector>
@@ -72,6 +73,10 @@ struct Surface {
 
 /// Euclidean distance (>= 0) from p to the (unbounded) surface.
 double surfaceDistance(const Surface& surface, const Vec3& p);
+
+/// The direction a surface shows, unit: a plane's normal, or the axis of a
+/// cylinder, cone or torus; none for a sphere (or a zero vector).
+std::optional<Vec3> surfaceDirection(const Surface& surface);
 
 /// Lower-case name used in files: "plane", "cylinder", "cone", "sphere", "torus".
 std::string_view surfaceTypeName(SurfaceType type);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -43,20 +44,9 @@ OrientedBox gridBox(const PointCloud& scan, std::span<const Surface> surfaces, s
   std::vector<Direction> dirs;
   const double cosParallel = std::cos(2.0 * std::numbers::pi / 180.0);
   for (const Surface& s : surfaces) {
-    Vec3 d;
-    if (const auto* p = s.as<PlaneSurface>()) {
-      d = p->normal;
-    } else if (const auto* c = s.as<CylinderSurface>()) {
-      d = c->axisDir;
-    } else if (const auto* c = s.as<ConeSurface>()) {
-      d = c->axisDir;
-    } else if (const auto* t = s.as<TorusSurface>()) {
-      d = t->axisDir;
-    } else {
-      continue;
-    }
-    if (!(d.norm() > 0.0)) continue;
-    d.normalize();
+    const std::optional<Vec3> direction = surfaceDirection(s);
+    if (!direction) continue;
+    const Vec3 d = *direction;
     const double w = double(s.inliers.size());
     auto same = std::find_if(dirs.begin(), dirs.end(), [&](const Direction& o) {
       return std::abs(o.dir.dot(d)) >= cosParallel;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -55,20 +56,9 @@ struct Direction {
 std::vector<Direction> partDirections(const std::vector<Surface>& surfaces) {
   std::vector<Direction> found;
   for (const Surface& s : surfaces) {
-    Vec3 d;
-    if (const auto* p = s.as<PlaneSurface>()) {
-      d = p->normal;
-    } else if (const auto* c = s.as<CylinderSurface>()) {
-      d = c->axisDir;
-    } else if (const auto* k = s.as<ConeSurface>()) {
-      d = k->axisDir;
-    } else if (const auto* t = s.as<TorusSurface>()) {
-      d = t->axisDir;
-    } else {
-      continue;
-    }
-    if (!(d.norm() > 0.0)) continue;
-    d.normalize();
+    const std::optional<Vec3> direction = surfaceDirection(s);
+    if (!direction) continue;
+    const Vec3 d = *direction;
     const double w = double(s.inliers.size());
     auto same = std::find_if(found.begin(), found.end(), [&](const Direction& f) {
       return std::abs(f.d.dot(d)) > kSameDirection;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 
 #include "cli_helpers.h"
 #include "io/report.h"
@@ -33,6 +34,21 @@ PointCloud boxPoints(const Mat3& axes, const Vec3& h) {
     }
   }
   return c;
+}
+
+TEST(SurfaceDirection, IsThePlanesNormalOrTheAxisUnitAndNoneForASphere) {
+  Surface s = planeWith(Vec3(0, 0, 2), 1);
+  EXPECT_EQ(surfaceDirection(s), std::optional<Vec3>(Vec3::UnitZ()));
+  s.shape = CylinderSurface{Vec3(1, 2, 3), Vec3(0, 3, 0), 1.0};
+  EXPECT_EQ(surfaceDirection(s), std::optional<Vec3>(Vec3::UnitY()));
+  s.shape = ConeSurface{Vec3::Zero(), Vec3(-1, 0, 0), 0.3};
+  EXPECT_EQ(surfaceDirection(s), std::optional<Vec3>(-Vec3::UnitX()));
+  s.shape = TorusSurface{Vec3::Zero(), Vec3(0, 0, -1), 2.0, 0.5};
+  EXPECT_EQ(surfaceDirection(s), std::optional<Vec3>(-Vec3::UnitZ()));
+  s.shape = SphereSurface{Vec3::Zero(), 1.0};
+  EXPECT_FALSE(surfaceDirection(s).has_value());
+  s.shape = CylinderSurface{Vec3::Zero(), Vec3::Zero(), 1.0};
+  EXPECT_FALSE(surfaceDirection(s).has_value());
 }
 
 TEST(GridBox, FollowsTheHeaviestSurfaceDirections) {
