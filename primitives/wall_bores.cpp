@@ -149,19 +149,26 @@ struct Circle {
   int side = 0;
 };
 
-// The section points on `circle` (within eps, normals within the threshold
-// of the radial direction on its side) that are still free.
-std::vector<std::uint32_t> onCircle(const Section& s, const Circle& circle, double eps,
-                                    double cosine, const std::vector<char>& taken) {
-  std::vector<std::uint32_t> on;
+// Calls f(i) for each section point on `circle` (within eps, normals within
+// the threshold of the radial direction on its side) that is still free.
+template <class F>
+void forEachOnCircle(const Section& s, const Circle& circle, double eps, double cosine,
+                     const std::vector<char>& taken, F&& f) {
   s.around(circle.c, circle.r + eps, [&](std::uint32_t i) {
     if (taken[i]) return;
     const Vec2 to = circle.c - s.q[i];
     const double rho = to.norm();
     if (std::abs(rho - circle.r) > eps || !(rho > 0.0)) return;
     if (double(circle.side) * s.m[i].dot(to) / rho < cosine) return;
-    on.push_back(i);
+    f(i);
   });
+}
+
+// The section points on `circle` that are still free, in index order.
+std::vector<std::uint32_t> onCircle(const Section& s, const Circle& circle, double eps,
+                                    double cosine, const std::vector<char>& taken) {
+  std::vector<std::uint32_t> on;
+  forEachOnCircle(s, circle, eps, cosine, taken, [&](std::uint32_t i) { on.push_back(i); });
   std::sort(on.begin(), on.end());
   return on;
 }
@@ -362,7 +369,9 @@ WallBoreStats addWallBores(const PointCloud& cloud, DetectionResult& result,
         if (j == i || taken[j]) continue;
         Circle circle;
         if (!circleOfPair(s, i, j, eps, rMin, rMax, circle)) continue;
-        const std::size_t count = onCircle(s, circle, eps, cosine, taken).size();
+        // Counted only: the pairs tried are many, the circle kept is one.
+        std::size_t count = 0;
+        forEachOnCircle(s, circle, eps, cosine, taken, [&](std::uint32_t) { ++count; });
         if (count > bestCount) bestCount = count, best = circle;
       }
       if (bestCount < least) break;

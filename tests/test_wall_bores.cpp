@@ -183,6 +183,7 @@ TEST(WallBores, TheSameSeedFindsTheSameBores) {
     return scan.result;
   };
   const DetectionResult a = run(3), b = run(3);
+  ASSERT_EQ(a.surfaces.size(), 3u);  // the face and both bores
   ASSERT_EQ(a.surfaces.size(), b.surfaces.size());
   EXPECT_EQ(a.assignment, b.assignment);
   for (std::size_t s = 0; s < a.surfaces.size(); ++s) {
