@@ -226,6 +226,56 @@ std::vector<Fitness> FitnessModel::evaluate(std::span<const CsgTree* const> tree
   return out;
 }
 
+Fitness treeFitness(const CsgTree& tree, std::span<const Vec3> points,
+                    std::span<const Vec3> normals, double diagonal,
+                    const FitnessOptions& options) {
+  if (points.size() != normals.size()) {
+    throw std::invalid_argument("treeFitness: " + std::to_string(points.size()) + " points but " +
+                                std::to_string(normals.size()) + " normals");
+  }
+  if (points.empty()) throw std::invalid_argument("treeFitness: no points");
+  if (!(diagonal > 0.0) || !std::isfinite(diagonal)) {
+    throw std::invalid_argument("treeFitness: the diagonal must be > 0");
+  }
+  if (tree.empty()) throw std::invalid_argument("treeFitness: the tree is empty");
+  if (options.voxelWeight > 0.0) {
+    throw std::invalid_argument("treeFitness: the voxel term needs a FitnessModel");
+  }
+  const SardfOperations sardf(options.sardfRadius * diagonal);
+  const SetOperations& ops =
+      options.operations == SetOperationKind::Sardf ? sardf : setOperations(options.operations);
+  const double epsilon = options.distanceTolerance * diagonal;
+  const double alpha = options.angleTolerance * std::numbers::pi / 180.0;
+  // Fixed blocks summed in order: the same sums on any number of threads.
+  constexpr std::size_t kBlock = 4096;
+  const std::size_t n = points.size();
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<double> distance(blocks, 0.0), normal(blocks, 0.0);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    double sd = 0.0, sn = 0.0;
+    for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+      const FieldValue v = tree.evaluate(points[i], ops);
+      const double r = v.f / epsilon;
+      sd += float(std::exp(-r * r));  // the model's float terms
+      const double gn = v.gradient.norm();
+      // As the model's terms: the angle between ∇f (inwards) and −n.
+      sn += normalTermOf(gn > 0.0 ? -v.gradient.dot(normals[i]) / gn : 0.0, alpha);
+    }
+    distance[b] = sd;
+    normal[b] = sn;
+  });
+  Fitness f;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    f.distanceTerm += distance[b];
+    f.normalTerm += normal[b];
+  }
+  f.nodes = tree.nodeCount();
+  const double lambda = options.sizeWeight >= 0.0 ? options.sizeWeight : std::log(double(n));
+  f.sizePenalty = lambda * double(f.nodes);
+  f.total = f.distanceTerm + f.normalTerm - f.sizePenalty;
+  return f;
+}
+
 std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::uint64_t seed) {
   std::vector<std::uint32_t> all(n);
   for (std::size_t i = 0; i < n; ++i) all[i] = std::uint32_t(i);

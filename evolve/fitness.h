@@ -107,6 +107,21 @@ class FitnessModel {
   std::unique_ptr<const Data> data_;
 };
 
+/// E(t) of one tree on `points` (with their outward `normals`), computed point
+/// by point from the tree's value and gradient (CsgTree::evaluate with the
+/// options' set operations): no per-primitive tables, so a single tree on
+/// millions of points costs one tree evaluation and one exp/acos pair per
+/// point, in memory independent of the points. The same E(t) as a
+/// FitnessModel on the same points and primitives, up to the model's float
+/// tables (relative 1e-6). Deterministic for any number of threads (the
+/// points are summed in fixed blocks, in order). No voxel term.
+/// @throw std::invalid_argument when points and normals differ in size,
+///        there are no points, D is not > 0, the tree is empty, or
+///        options.voxelWeight > 0.
+Fitness treeFitness(const CsgTree& tree, std::span<const Vec3> points,
+                    std::span<const Vec3> normals, double diagonal,
+                    const FitnessOptions& options = {});
+
 /// `count` indices of [0, n) spread evenly over a seeded shuffle (all of
 /// them, in order, when count >= n): the points of a rough fitness.
 std::vector<std::uint32_t> spreadSample(std::size_t n, std::size_t count, std::uint64_t seed);

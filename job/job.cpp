@@ -41,9 +41,7 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobOptions& op
   FitnessOptions fo = options.reconstruct.gp.fitness;
   fo.operations = SetOperationKind::MinMax;
   fo.voxelWeight = 0.0;
-  const FitnessModel model(scan.cloud.points, scan.cloud.normals, scan.cloud.diagonal(),
-                           PrimitiveLibrary::ofTree(tree), fo);
-  return model.evaluate(tree);
+  return treeFitness(tree, scan.cloud.points, scan.cloud.normals, scan.cloud.diagonal(), fo);
 }
 
 // tree.step and preview.png. The tree is the result: a solid OpenCASCADE

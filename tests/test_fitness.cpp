@@ -542,6 +542,74 @@ TEST(Fitness, RefusesForeignLeavesAndBadInput) {
   EXPECT_THROW(FitnessModel(in.points, in.normals, 1.0, library, voxels), std::invalid_argument);
 }
 
+// treeFitness (point by point, no tables) against the model on the same
+// points, for each kind of operations; the sizes and totals too.
+TEST(Fitness, TreeFitnessIsTheModelsWithoutItsTables) {
+  const test::OrientedPoints in = noisyCube(17);
+  const PrimitiveLibrary library = test::cubePlanes(
+      {Sphere{Vec3(0.3, 0.1, 0.0), 0.7}, Cylinder{Vec3::Zero(), Vec3::UnitX(), 0.4, 3.0}});
+  const double n = double(in.points.size());
+  for (const SetOperationKind kind :
+       {SetOperationKind::MinMax, SetOperationKind::Sardf, SetOperationKind::RFunction}) {
+    FitnessOptions options;
+    options.angleTolerance = 20.0;
+    options.operations = kind;
+    const FitnessModel model(in.points, in.normals, kDiagonal, library, options);
+    std::vector<CsgTree> trees = randomTrees(library, 19, 12, 5, 0.8);
+    trees.push_back(CsgTree::complement(trees.front()));
+    for (std::size_t t = 0; t < trees.size(); ++t) {
+      const Fitness expected = model.evaluate(trees[t]);
+      const Fitness got = treeFitness(trees[t], in.points, in.normals, kDiagonal, options);
+      // Both sums are of float terms; R-functions' tables round f itself.
+      const double tolerance = (kind == SetOperationKind::RFunction ? 1e-4 : 1e-6) * n;
+      EXPECT_NEAR(got.distanceTerm, expected.distanceTerm, tolerance) << int(kind) << " " << t;
+      EXPECT_NEAR(got.normalTerm, expected.normalTerm, tolerance) << int(kind) << " " << t;
+      EXPECT_EQ(got.nodes, expected.nodes);
+      EXPECT_DOUBLE_EQ(got.sizePenalty, expected.sizePenalty);
+      EXPECT_NEAR(got.total, expected.total, 2 * tolerance);
+    }
+  }
+  // A tree that misses every point scores (almost) nothing.
+  const CsgTree far = CsgTree::leaf(Sphere{Vec3(10.0, 10.0, 10.0), 0.1});
+  EXPECT_LT(treeFitness(far, in.points, in.normals, kDiagonal).distanceTerm, 1e-6);
+}
+
+TEST(Fitness, TreeFitnessIsTheSameOnAnyNumberOfThreads) {
+  // More points than one block, so the blocks are summed.
+  const test::OrientedPoints in = test::cubeFacePoints(60);
+  ASSERT_GT(in.points.size(), 3 * 4096u);
+  const PrimitiveLibrary library = test::cubePlanes({Sphere{Vec3(0.5, 0.5, 0.5), 0.8}});
+  const CsgTree tree =
+      CsgTree::subtract({test::cubeTree(library), library.leafTree(library.size() - 1)});
+  Fitness one, two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = treeFitness(tree, in.points, in.normals, kDiagonal);
+  }
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    two = treeFitness(tree, in.points, in.normals, kDiagonal);
+  }
+  EXPECT_EQ(one.total, two.total);
+  EXPECT_EQ(one.distanceTerm, two.distanceTerm);
+  EXPECT_EQ(one.normalTerm, two.normalTerm);
+  EXPECT_GT(one.distanceTerm, 0.5 * double(in.points.size()));
+}
+
+TEST(Fitness, TreeFitnessRefusesBadInput) {
+  const test::OrientedPoints in = test::cubeFacePoints(4);
+  const PrimitiveLibrary library = test::cubePlanes();
+  const CsgTree tree = test::cubeTree(library);
+  const std::vector<Vec3> none;
+  EXPECT_THROW(treeFitness(tree, none, none, 1.0), std::invalid_argument);
+  EXPECT_THROW(treeFitness(tree, in.points, none, 1.0), std::invalid_argument);
+  EXPECT_THROW(treeFitness(tree, in.points, in.normals, 0.0), std::invalid_argument);
+  EXPECT_THROW(treeFitness(CsgTree(), in.points, in.normals, 1.0), std::invalid_argument);
+  FitnessOptions voxels;
+  voxels.voxelWeight = 1.0;
+  EXPECT_THROW(treeFitness(tree, in.points, in.normals, 1.0, voxels), std::invalid_argument);
+}
+
 TEST(Fitness, SpreadSampleIsSortedDistinctAndSeeded) {
   const auto a = spreadSample(1000, 100, 3), b = spreadSample(1000, 100, 3);
   EXPECT_EQ(a, b);
