@@ -34,6 +34,15 @@ class NearestNeighbors {
   /// the same distance by index.
   void kNearest(const Vec3& q, std::size_t k, std::vector<std::uint32_t>& indices,
                 std::vector<double>* squaredDistances = nullptr) const;
+  /// kNearest(q, k, ...) searching only the points within squared distance
+  /// `bound2` of q: the same indices and distances, found faster when the
+  /// bound is tight. A bound from k points of the set near q (the neighbours
+  /// of the previous query of a loop in order(): kNearestBound) holds at
+  /// least k points; when fewer than k lie within it, the search runs again
+  /// without it.
+  void kNearestWithin(const Vec3& q, std::size_t k, double bound2,
+                      std::vector<std::uint32_t>& indices,
+                      std::vector<double>* squaredDistances = nullptr) const;
   /// The indexed points' indices in spatialOrder(): a loop over all the
   /// points that queries the tree runs fastest in this order.
   std::span<const std::uint32_t> order() const;
@@ -42,5 +51,13 @@ class NearestNeighbors {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// An upper bound on the squared distance from q to its k-th nearest point,
+/// from k indices of `points` (e.g. the previous query's neighbours): the
+/// largest of their squared distances to q, widened by a relative 1e-9 so
+/// that rounding cannot put a neighbour outside it. Infinite when fewer than
+/// k indices are given.
+double kNearestBound(std::span<const Vec3> points, const Vec3& q,
+                     std::span<const std::uint32_t> near, std::size_t k);
 
 }  // namespace csgvox

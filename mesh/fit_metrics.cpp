@@ -1,5 +1,6 @@
 #include "mesh/fit_metrics.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -19,11 +20,13 @@ namespace {
 // sample. Exact on smooth regions; off by at most about a spacing near edges.
 // `nearestOut` receives the sample that gave the distance (whose tangent
 // plane holds p), so its normal is the surface normal seen from p.
+// `near` holds the previous query's samples (they bound this search) and
+// receives this one's.
 double surfaceDistance(const Vec3& p, const NearestNeighbors& index, const std::vector<Vec3>& pts,
                        const std::vector<Vec3>& normals, double spacing,
-                       std::uint32_t* nearestOut) {
-  thread_local std::vector<std::uint32_t> near;
-  index.kNearest(p, normals.empty() ? 1 : 4, near);
+                       std::vector<std::uint32_t>& near, std::uint32_t* nearestOut) {
+  const std::size_t k = normals.empty() ? 1 : 4;
+  index.kNearestWithin(p, k, kNearestBound(pts, p, near, k), near);
   if (nearestOut) *nearestOut = near.front();
   if (normals.empty()) return (p - pts[near.front()]).norm();
   double best = std::numeric_limits<double>::infinity();
@@ -65,23 +68,30 @@ FitMetrics evaluateFit(const CsgTree& tree, const PointCloud& scan, const FitOpt
   // Both loops visit their points in space order (cache-friendly queries).
   const std::size_t n = scan.size();
   std::vector<double> eq9(n), dist(n), cosine(n, 0.0);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t at) {
-    const std::size_t k = scanIndex.order()[at];
-    const Vec3& p = scan.points[k];
-    double best = std::numeric_limits<double>::infinity();
-    for (const Node* leaf : leaves) best = std::min(best, std::abs(leaf->primitive.value(p)));
-    eq9[k] = best;
-    std::uint32_t nearest = 0;
-    dist[k] = surfaceDistance(p, surfaceIndex, sp, sn, surfaceSpacing, &nearest);
-    if (m.hasNormals) cosine[k] = scan.normals[k].dot(sn[nearest]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
+    std::vector<std::uint32_t> near;
+    for (std::size_t at = range.begin(); at != range.end(); ++at) {
+      const std::size_t k = scanIndex.order()[at];
+      const Vec3& p = scan.points[k];
+      double best = std::numeric_limits<double>::infinity();
+      for (const Node* leaf : leaves) best = std::min(best, std::abs(leaf->primitive.value(p)));
+      eq9[k] = best;
+      std::uint32_t nearest = 0;
+      dist[k] = surfaceDistance(p, surfaceIndex, sp, sn, surfaceSpacing, near, &nearest);
+      if (m.hasNormals) cosine[k] = scan.normals[k].dot(sn[nearest]);
+    }
   });
 
   // Boundary samples to the scan, for the other half of the Chamfer distance.
   const double scanSpacing = std::sqrt(surface.surfaceArea / double(n));
   std::vector<double> back(sp.size());
-  tbb::parallel_for(std::size_t(0), sp.size(), [&](std::size_t at) {
-    const std::size_t k = surfaceIndex.order()[at];
-    back[k] = surfaceDistance(sp[k], scanIndex, scan.points, scan.normals, scanSpacing, nullptr);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sp.size()), [&](const auto& range) {
+    std::vector<std::uint32_t> near;
+    for (std::size_t at = range.begin(); at != range.end(); ++at) {
+      const std::size_t k = surfaceIndex.order()[at];
+      back[k] =
+          surfaceDistance(sp[k], scanIndex, scan.points, scan.normals, scanSpacing, near, nullptr);
+    }
   });
 
   const double tol = options.withinTolerance * m.diagonal;

@@ -142,7 +142,9 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
     std::vector<Point3> local;
     for (std::size_t at = range.begin(); at != range.end(); ++at) {
       const std::size_t i = nn.order()[at];  // neighbours visited together: cache-friendly
-      nn.kNearest(points[i], k + 1, hood, &d2);  // (never short: n > k)
+      // (never short: n > k); the previous point's neighbours bound the
+      // search (the same result)
+      nn.kNearestWithin(points[i], k + 1, kNearestBound(points, points[i], hood, k + 1), hood, &d2);
       // Distinct points: the point itself is the only one at distance 0.
       std::iter_swap(hood.begin(), std::find(hood.begin(), hood.end(), std::uint32_t(i)));
       std::copy(hood.begin(), hood.begin() + k, hoods.indices.begin() + std::ptrdiff_t(i * k));
@@ -297,7 +299,8 @@ void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& nor
       }
       sharpened[i] = normals[chosen];
       if (best < int(k)) {
-        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance)) sharpened[i] = *face;
+        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance))
+          sharpened[i] = *face;
       }
     }
   });

@@ -1,5 +1,6 @@
 #include "primitives/outlier_removal.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -38,27 +39,32 @@ Local localMeasures(std::span<const Vec3> points, unsigned k) {
   local.spacing.resize(n);
   local.offPlane.resize(n);
   local.planeRms.resize(n);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t at) {
-    const std::size_t i = tree.order()[at];  // neighbours visited together: cache-friendly
-    thread_local std::vector<std::uint32_t> found;
-    thread_local std::vector<double> d2;
-    tree.kNearest(points[i], k + 1, found, &d2);
-    // The point itself (or a copy of it) comes first; drop the entry of i.
-    auto self = std::find(found.begin(), found.end(), std::uint32_t(i));
-    if (self != found.end()) {
-      d2.erase(d2.begin() + (self - found.begin()));
-      found.erase(self);
-    } else {
-      found.pop_back();
-      d2.pop_back();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& range) {
+    std::vector<std::uint32_t> found, previous;
+    std::vector<double> d2;
+    for (std::size_t at = range.begin(); at != range.end(); ++at) {
+      const std::size_t i = tree.order()[at];  // neighbours visited together: cache-friendly
+      // The previous point's neighbours bound the search (the same result).
+      tree.kNearestWithin(points[i], k + 1, kNearestBound(points, points[i], previous, k + 1),
+                          found, &d2);
+      previous = found;
+      // The point itself (or a copy of it) comes first; drop the entry of i.
+      auto self = std::find(found.begin(), found.end(), std::uint32_t(i));
+      if (self != found.end()) {
+        d2.erase(d2.begin() + (self - found.begin()));
+        found.erase(self);
+      } else {
+        found.pop_back();
+        d2.pop_back();
+      }
+      double sum = 0.0;
+      for (double d : d2) sum += std::sqrt(d);
+      local.spacing[i] = sum / k;
+      std::copy(found.begin(), found.end(), local.hood.begin() + std::ptrdiff_t(i * k));
+      const PrincipalAxes axes = principalAxes(points, found);
+      local.offPlane[i] = std::abs(axes.leastAxis().dot(points[i] - axes.mean));
+      local.planeRms[i] = std::sqrt(std::max(0.0, axes.variances[2]));
     }
-    double sum = 0.0;
-    for (double d : d2) sum += std::sqrt(d);
-    local.spacing[i] = sum / k;
-    std::copy(found.begin(), found.end(), local.hood.begin() + std::ptrdiff_t(i * k));
-    const PrincipalAxes axes = principalAxes(points, found);
-    local.offPlane[i] = std::abs(axes.leastAxis().dot(points[i] - axes.mean));
-    local.planeRms[i] = std::sqrt(std::max(0.0, axes.variances[2]));
   });
   return local;
 }
@@ -102,9 +108,9 @@ Outliers findOutliers(std::span<const Vec3> points, const OutlierOptions& option
       ++result.scattered;
       continue;
     }
-    const double limit = std::max({options.offPlaneFactor * local.planeRms[i],
-                                   options.offPlaneFactor * noise,
-                                   options.offSpacing * typical[i]});
+    const double limit =
+        std::max({options.offPlaneFactor * local.planeRms[i], options.offPlaneFactor * noise,
+                  options.offSpacing * typical[i]});
     if (local.offPlane[i] > limit && ratio[i] > std::log(options.offRatio)) {
       result.outlier[i] = true;
       ++result.offSurface;

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -55,6 +56,53 @@ TEST(NearestNeighbors, CopiesOfAPointComeByIndex) {
   std::vector<std::uint32_t> found;
   nn.kNearest(p[123], 5, found);
   EXPECT_EQ(found, (std::vector<std::uint32_t>{7, 40, 123, 250, 410}));
+}
+
+// A loop over every point in order(), each query bounded by the previous
+// one's neighbours, gives kNearest's indices and distances exactly, copies
+// of points included; so does a bound that holds fewer than k points.
+TEST(NearestNeighbors, BoundedQueriesGiveTheSameNeighbours) {
+  std::vector<Vec3> p = randomPoints(3000, 11);
+  for (std::size_t i = 0; i < 300; ++i) p.push_back(p[7 * i]);  // copies
+  const NearestNeighbors nn(p);
+  for (const std::size_t k : {1u, 4u, 13u}) {
+    std::vector<std::uint32_t> previous, bounded, plain;
+    std::vector<double> boundedD2, plainD2;
+    std::size_t tight = 0;
+    for (std::size_t at = 0; at < p.size(); ++at) {
+      const Vec3& q = p[nn.order()[at]];
+      const double bound = kNearestBound(p, q, previous, k);
+      nn.kNearestWithin(q, k, bound, bounded, &boundedD2);
+      nn.kNearest(q, k, plain, &plainD2);
+      ASSERT_EQ(bounded, plain) << "k " << k << " at " << at;
+      ASSERT_EQ(boundedD2, plainD2) << "k " << k << " at " << at;
+      // The bound holds the k-th neighbour: it is a bound.
+      if (at > 0) {
+        ASSERT_GE(bound, plainD2.back());
+        tight += bound < 10.0 * plainD2.back() + 1e-9;
+      }
+      previous = bounded;
+    }
+    // Neighbours of the previous point in order() are near: the bounds are
+    // mostly tight (not infinite), so the searches are really bounded. (With
+    // k = 1 each point is its own nearest, at distance 0.)
+    if (k > 1) {
+      EXPECT_GT(tight, p.size() / 2) << "k " << k;
+    }
+  }
+  // Bounds that hold fewer than k points (none, or one) fall back.
+  std::vector<std::uint32_t> got, want;
+  std::vector<double> gotD2, wantD2;
+  for (const double bound : {0.0, 1e-6, -1.0}) {
+    nn.kNearestWithin(p[5], 13, bound, got, &gotD2);
+    nn.kNearest(p[5], 13, want, &wantD2);
+    EXPECT_EQ(got, want);
+    EXPECT_EQ(gotD2, wantD2);
+  }
+  EXPECT_EQ(kNearestBound(p, p[0], std::vector<std::uint32_t>{1, 2}, 3),
+            std::numeric_limits<double>::infinity());
+  EXPECT_GE(kNearestBound(p, p[0], std::vector<std::uint32_t>{1, 2}, 2),
+            (p[1] - p[0]).squaredNorm());
 }
 
 TEST(NearestNeighbors, OrderIsAPermutationThatKeepsNeighboursTogether) {
