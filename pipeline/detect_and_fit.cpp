@@ -139,11 +139,13 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     det.message = buf;
     return out;
   }
-  // After a search on a subsample, the surfaces were pruned and split there
-  // (detectSurfaces): on all the points they are fitted, and the points
-  // assigned, only.
+  // After a search on a subsample, the surfaces were fitted, pruned and
+  // split there (detectSurfaces): on all the points they are assigned their
+  // points, then fitted once.
   SurfaceFitOptions fit;
-  if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = false;
+  if (det.searchedPoints < scan.size()) {
+    fit.removeRedundant = fit.splitSteps = fit.fitBeforeReassign = false;
+  }
   fitSurfaces(scan, out.detection, fit);
   if (options.wallBores && options.detect.estimatedNormals) {
     WallBoreOptions wo = options.wallBoreOptions;

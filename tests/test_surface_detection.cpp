@@ -805,6 +805,41 @@ TEST(SurfaceDetection, ASearchOnASubsampleAssignsEveryPoint) {
   EXPECT_NEAR(double(sub.surfaces.size()), double(all.surfaces.size()), 3.0);
 }
 
+// After a search on a subsample (whose surfaces were fitted there), the
+// whole scan's fit can skip the fit before the re-assignment: half the fits,
+// the same surfaces within a small fraction of epsilon, the same points.
+TEST(SurfaceDetection, SurfacesFittedOnASubsampleAreAssignedThenFittedOnce) {
+  const Scan scan = readScan(dataDir() / "housing_complex" / "scan_noisy.ply");
+  DetectOptions o;
+  o.ransacPoints = 4000;  // of 10 000
+  const DetectionResult sub = detectSurfaces(scan.cloud, o);
+  ASSERT_TRUE(sub.ok()) << sub.message;
+  SurfaceFitOptions both, after;
+  both.removeRedundant = both.splitSteps = after.removeRedundant = after.splitSteps = false;
+  after.fitBeforeReassign = false;
+  DetectionResult twice = sub, once = sub;
+  FitMemo memoTwice(scan.cloud), memoOnce(scan.cloud);
+  fitSurfaces(scan.cloud, twice, both, &memoTwice);
+  fitSurfaces(scan.cloud, once, after, &memoOnce);
+  EXPECT_LT(memoOnce.solved() + memoOnce.hits(), memoTwice.solved() + memoTwice.hits());
+  EXPECT_LE(memoOnce.solved() + memoOnce.hits(), sub.surfaces.size());
+  ASSERT_EQ(once.surfaces.size(), twice.surfaces.size());
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < scan.cloud.size(); ++i)
+    same += once.assignment[i] == twice.assignment[i];
+  EXPECT_GE(double(same), 0.99 * double(scan.cloud.size()));
+  for (std::size_t s = 0; s < once.surfaces.size(); ++s) {
+    ASSERT_EQ(once.surfaces[s].type(), twice.surfaces[s].type()) << s;
+    // The two fits' distances at the surface's own points agree.
+    double worst = 0.0;
+    for (std::uint32_t i : once.surfaces[s].inliers) {
+      worst = std::max(worst, std::abs(surfaceDistance(once.surfaces[s], scan.cloud.points[i]) -
+                                       surfaceDistance(twice.surfaces[s], scan.cloud.points[i])));
+    }
+    EXPECT_LT(worst, 0.1 * sub.epsilon) << s;
+  }
+}
+
 TEST(SurfaceDetection, MillimetresAndMetresGiveTheSameSurfaces) {
   const Scan scan = readScan(dataDir() / "rotated_block" / "scan_noisy.ply");
   PointCloud metres = scan.cloud;
