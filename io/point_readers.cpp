@@ -5,9 +5,13 @@
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/property_map.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <istream>
 #include <iterator>
+#include <limits>
 #include <string_view>
 #include <utility>
 #include <vector>
@@ -33,9 +37,92 @@ void addPoint(PointCloud& cloud, const Vec3& point, const Vec3* normal, const st
   cloud.normals.push_back(*normal / length);
 }
 
+// A binary PLY whose elements all have rows of fixed size (no lists; a
+// point cloud's usual layout): the vertex rows are read in one block and
+// x y z (nx ny nz) taken at their offsets, converted as CGAL's reader
+// converts them, in a fraction of its time (0.9 s of a 1M-point scan's
+// reading). False, with nothing read, for any other layout.
+bool readFixedRows(std::istream& in, const PlyHeader& header, const std::string& source,
+                   PointCloud& cloud) {
+  if (header.data == PlyData::Ascii) return false;
+  std::uint64_t skip = 0;
+  for (const PlyElement& element : header.elements) {
+    std::uint64_t row = 0;
+    for (const PlyProperty& p : element.properties) {
+      if (!p.countType.empty() || plyTypeSize(p.type) == 0) return false;
+      row += std::uint64_t(plyTypeSize(p.type));
+    }
+    if (&element == header.vertices) break;
+    skip += element.count * row;
+  }
+  const PlyElement& vertices = *header.vertices;
+  // Offset and size of a property in a vertex row (size 0: absent).
+  struct Field {
+    std::size_t offset = 0;
+    int size = 0;
+  };
+  std::size_t stride = 0;
+  for (const PlyProperty& p : vertices.properties) stride += std::size_t(plyTypeSize(p.type));
+  const auto field = [&](std::string_view name) {
+    Field f;
+    std::size_t at = 0;
+    for (const PlyProperty& p : vertices.properties) {
+      if (p.name == name) f = {at, plyTypeSize(p.type)};
+      at += std::size_t(plyTypeSize(p.type));
+    }
+    return f;
+  };
+  const std::array<Field, 6> fields = {field("x"),  field("y"),  field("z"),
+                                       field("nx"), field("ny"), field("nz")};
+  const std::size_t count = std::size_t(vertices.count);
+  if (stride == 0 || count > std::numeric_limits<std::size_t>::max() / stride) return false;
+  // The data are the file's last dataBytes bytes.
+  in.clear();
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (!in || size < std::streamoff(header.dataBytes)) return false;
+  in.seekg(size - std::streamoff(header.dataBytes) + std::streamoff(skip));
+  if (!in) return false;
+  std::vector<char> block(count * stride);
+  in.read(block.data(), std::streamsize(block.size()));
+  if (std::size_t(in.gcount()) != block.size()) {
+    parseError(source, "PLY vertex data is truncated (read " +
+                           std::to_string(std::size_t(in.gcount()) / stride) + " of " +
+                           std::to_string(count) + " vertices)");
+  }
+  const bool swap = header.data == PlyData::BigEndian;
+  const auto value = [&](const char* row, const Field& f) {
+    std::array<char, 8> bytes{};
+    std::memcpy(bytes.data(), row + f.offset, std::size_t(f.size));
+    if (swap) std::reverse(bytes.begin(), bytes.begin() + f.size);
+    if (f.size == 4) {
+      float v;
+      std::memcpy(&v, bytes.data(), 4);
+      return double(v);
+    }
+    double v;
+    std::memcpy(&v, bytes.data(), 8);
+    return v;
+  };
+  cloud.points.reserve(count);
+  if (header.hasNormals) cloud.normals.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const char* row = block.data() + i * stride;
+    const Vec3 p(value(row, fields[0]), value(row, fields[1]), value(row, fields[2]));
+    if (header.hasNormals) {
+      const Vec3 n(value(row, fields[3]), value(row, fields[4]), value(row, fields[5]));
+      addPoint(cloud, p, &n, source, "point " + std::to_string(i + 1));
+    } else {
+      addPoint(cloud, p, nullptr, source, "point " + std::to_string(i + 1));
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 PointCloud readPlyPoints(std::istream& in, const PlyHeader& header, const std::string& source) {
+  if (PointCloud cloud; readFixedRows(in, header, source, cloud)) return cloud;
   std::vector<PointNormal> rows;
   rows.reserve(static_cast<std::size_t>(header.vertices->count));
   rewindStream(in);
