@@ -99,29 +99,14 @@ std::uint32_t NearestNeighbors::nearest(const Vec3& q, double* squaredDistance) 
   return impl_->order[index];
 }
 
-namespace {
-
-// The `found` results of a query as kNearest gives them: indices as passed
-// to the constructor, points at one distance (copies of a point) by index,
-// whatever the order the tree visited them in.
-void finishQuery(std::size_t found, std::vector<std::uint32_t>& indices, std::vector<double>& d2,
-                 const std::vector<std::uint32_t>& order) {
-  indices.resize(found);
-  d2.resize(found);
-  for (std::uint32_t& i : indices) i = order[i];
-  for (std::size_t a = 0; a < found;) {
-    std::size_t b = a + 1;
-    while (b < found && d2[b] == d2[a]) ++b;
-    if (b - a > 1)
-      std::sort(indices.begin() + std::ptrdiff_t(a), indices.begin() + std::ptrdiff_t(b));
-    a = b;
-  }
-}
-
-}  // namespace
-
 void NearestNeighbors::kNearest(const Vec3& q, std::size_t k, std::vector<std::uint32_t>& indices,
                                 std::vector<double>* squaredDistances) const {
+  kNearestWithin(q, k, std::numeric_limits<double>::infinity(), indices, squaredDistances);
+}
+
+void NearestNeighbors::kNearestWithin(const Vec3& q, std::size_t k, double bound2,
+                                      std::vector<std::uint32_t>& indices,
+                                      std::vector<double>* squaredDistances) const {
   k = std::min(k, size());
   indices.resize(k);
   std::vector<double> local;
@@ -130,34 +115,29 @@ void NearestNeighbors::kNearest(const Vec3& q, std::size_t k, std::vector<std::u
   if (k == 0) return;
   nanoflann::KNNResultSet<double, std::uint32_t> result(k);
   result.init(indices.data(), d2.data());
-  impl_->tree->findNeighbors(result, q.data(), nanoflann::SearchParams());
-  finishQuery(result.size(), indices, d2, impl_->order);
-}
-
-void NearestNeighbors::kNearestWithin(const Vec3& q, std::size_t k, double bound2,
-                                      std::vector<std::uint32_t>& indices,
-                                      std::vector<double>* squaredDistances) const {
-  k = std::min(k, size());
-  if (k == 0 || !(bound2 < std::numeric_limits<double>::max())) {
-    kNearest(q, k, indices, squaredDistances);
-    return;
-  }
-  indices.resize(k);
-  std::vector<double> local;
-  std::vector<double>& d2 = squaredDistances ? *squaredDistances : local;
-  d2.resize(k);
-  nanoflann::KNNResultSet<double, std::uint32_t> result(k);
-  result.init(indices.data(), d2.data());
-  // The result set's worst distance starts at the bound instead of the
-  // largest double: the search skips what lies beyond it and, for what lies
+  // A bound replaces the result set's starting worst distance (the largest
+  // double): the search skips what lies beyond it and, for what lies
   // within, takes the same steps as without it.
-  d2[k - 1] = bound2;
+  const bool bounded = bound2 < std::numeric_limits<double>::max();
+  if (bounded) d2[k - 1] = bound2;
   impl_->tree->findNeighbors(result, q.data(), nanoflann::SearchParams());
-  if (result.size() < k) {
-    kNearest(q, k, indices, squaredDistances);
+  if (bounded && result.size() < k) {
+    kNearest(q, k, indices, squaredDistances);  // fewer than k within the bound
     return;
   }
-  finishQuery(k, indices, d2, impl_->order);
+  const std::size_t found = result.size();
+  indices.resize(found);
+  d2.resize(found);
+  for (std::uint32_t& i : indices) i = impl_->order[i];
+  // Points at one distance (copies of a point) by index, whatever the
+  // order the tree visited them in.
+  for (std::size_t a = 0; a < found;) {
+    std::size_t b = a + 1;
+    while (b < found && d2[b] == d2[a]) ++b;
+    if (b - a > 1)
+      std::sort(indices.begin() + std::ptrdiff_t(a), indices.begin() + std::ptrdiff_t(b));
+    a = b;
+  }
 }
 
 double kNearestBound(std::span<const Vec3> points, const Vec3& q,

@@ -25,15 +25,19 @@ using IoKernel = CGAL::Simple_cartesian<double>;
 using PointNormal = std::pair<IoKernel::Point_3, IoKernel::Vector_3>;
 
 /// Appends a point (and its normal, when given) to `cloud` after checking
-/// it; `what` names the point in messages ("point 7", "line 9").
+/// it; `kind` and `number` name the point in messages ("point 7", "line 9"),
+/// built only for a message.
 void addPoint(PointCloud& cloud, const Vec3& point, const Vec3* normal, const std::string& source,
-              const std::string& what) {
-  if (!point.allFinite()) parseError(source, what + " has a non-finite coordinate");
+              std::string_view kind, std::size_t number) {
+  const auto fail = [&](const char* problem) {
+    parseError(source, std::string(kind) + " " + std::to_string(number) + problem);
+  };
+  if (!point.allFinite()) fail(" has a non-finite coordinate");
   cloud.points.push_back(point);
   if (!normal) return;
-  if (!normal->allFinite()) parseError(source, what + " has a non-finite normal");
+  if (!normal->allFinite()) fail(" has a non-finite normal");
   const double length = normal->norm();
-  if (!(length > 1e-12)) parseError(source, what + " has a zero-length (or missing) normal");
+  if (!(length > 1e-12)) fail(" has a zero-length (or missing) normal");
   cloud.normals.push_back(*normal / length);
 }
 
@@ -109,12 +113,10 @@ bool readFixedRows(std::istream& in, const PlyHeader& header, const std::string&
   for (std::size_t i = 0; i < count; ++i) {
     const char* row = block.data() + i * stride;
     const Vec3 p(value(row, fields[0]), value(row, fields[1]), value(row, fields[2]));
-    if (header.hasNormals) {
-      const Vec3 n(value(row, fields[3]), value(row, fields[4]), value(row, fields[5]));
-      addPoint(cloud, p, &n, source, "point " + std::to_string(i + 1));
-    } else {
-      addPoint(cloud, p, nullptr, source, "point " + std::to_string(i + 1));
-    }
+    Vec3 n = Vec3::Zero();
+    if (header.hasNormals)
+      n = {value(row, fields[3]), value(row, fields[4]), value(row, fields[5])};
+    addPoint(cloud, p, header.hasNormals ? &n : nullptr, source, "point", i + 1);
   }
   return true;
 }
@@ -157,7 +159,7 @@ PointCloud readPlyPoints(std::istream& in, const PlyHeader& header, const std::s
     const auto& [p, n] = rows[i];
     const Vec3 normal(n.x(), n.y(), n.z());
     addPoint(cloud, Vec3(p.x(), p.y(), p.z()), header.hasNormals ? &normal : nullptr, source,
-             "point " + std::to_string(i + 1));
+             "point", i + 1);
   }
   return cloud;
 }
@@ -199,7 +201,8 @@ PointCloud readXyzPoints(std::istream& in, const std::string& source) {
       }
     }
     const Vec3 normal(v[3], v[4], v[5]);
-    addPoint(cloud, Vec3(v[0], v[1], v[2]), columns == 6 ? &normal : nullptr, source, where);
+    addPoint(cloud, Vec3(v[0], v[1], v[2]), columns == 6 ? &normal : nullptr, source, "line",
+             lineNumber);
   }
   return cloud;
 }

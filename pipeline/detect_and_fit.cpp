@@ -140,12 +140,10 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
     return out;
   }
   // After a search on a subsample, the surfaces were fitted, pruned and
-  // split there (detectSurfaces): on all the points they are assigned their
-  // points, then fitted once.
+  // split there, and all the points assigned (detectSurfaces): on all the
+  // points they are fitted once.
   SurfaceFitOptions fit;
-  if (det.searchedPoints < scan.size()) {
-    fit.removeRedundant = fit.splitSteps = fit.fitBeforeReassign = false;
-  }
+  if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = fit.reassign = false;
   fitSurfaces(scan, out.detection, fit);
   if (options.wallBores && options.detect.estimatedNormals) {
     WallBoreOptions wo = options.wallBoreOptions;

@@ -299,8 +299,7 @@ void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& nor
       }
       sharpened[i] = normals[chosen];
       if (best < int(k)) {
-        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance))
-          sharpened[i] = *face;
+        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance)) sharpened[i] = *face;
       }
     }
   });

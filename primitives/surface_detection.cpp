@@ -924,7 +924,7 @@ DetectionResult detectOnSubsample(const PointCloud& cloud, const DetectOptions& 
       options.minPointsFloor,
       std::size_t(std::llround(double(result.minPoints) * double(cloud.size()) /
                                double(sub.size()))));
-  reassignPoints(cloud, result, result.minPoints, false);
+  reassignPoints(cloud, result, result.minPoints, true);
   summarise(cloud, result);
   result.message += "; searched on " + std::to_string(sub.size()) + " of the " +
                     std::to_string(cloud.size()) + " points";

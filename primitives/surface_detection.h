@@ -140,10 +140,11 @@ double estimateSpacing(const PointCloud& cloud);
 /// and minimum support measured there, and its surfaces are fitted there
 /// (fitSurfaces: the redundant ones dropped, stepped cylinders split, both
 /// of which depend on the density); then every point of the scan is
-/// assigned to the surface it lies on (reassignPoints), with the minimum
-/// support scaled to the whole scan. A surface fit on the whole scan should
-/// then leave those decisions alone (detectAndFit runs it without
-/// removeRedundant and splitSteps).
+/// assigned to the surface it lies on (reassignPoints, in connected
+/// patches), with the minimum support scaled to the whole scan. A surface
+/// fit on the whole scan should then leave those decisions alone
+/// (detectAndFit runs it without removeRedundant, splitSteps and reassign:
+/// the surfaces fitted once on their points).
 /// Surfaces are sorted by inlier count (largest first); each inlier belongs
 /// to exactly one surface. Plane normals agree with the majority of their
 /// inliers' normals; curved surfaces say whether they are convex.

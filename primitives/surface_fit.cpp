@@ -324,7 +324,7 @@ void fitSurfaces(const PointCloud& cloud, DetectionResult& result, const Surface
   }
   std::optional<FitMemo> own;
   FitMemo& fits = memo != nullptr ? *memo : own.emplace(cloud);
-  if (options.fitBeforeReassign || !options.reassign) fitAll(cloud, result, options, fits);
+  fitAll(cloud, result, options, fits);
   if (options.removeRedundant) removeRedundant(cloud, result, options);
   if (options.splitSteps) splitSteps(cloud, result, options, fits);
   if (options.reassign) {

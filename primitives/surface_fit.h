@@ -24,9 +24,6 @@ struct SurfaceFitOptions {
   std::size_t maxFitPoints =
       5000;  ///< larger inlier sets are fitted on an even subset of this many points (count)
   bool reassign = true;  ///< re-assign points to the nearest compatible surface, then re-fit
-  bool fitBeforeReassign = true;   ///< also fit every surface before the re-assignment (off:
-                                   ///< surfaces already fitted elsewhere are only re-assigned
-                                   ///< their points and fitted once, after)
   bool connectedPatches = true;    ///< the re-assignment keeps a surface's points only on its
                                    ///< connected patches (see reassignPoints)
   bool removeRedundant = true;     ///< drop surfaces whose points other surfaces explain as well

@@ -805,9 +805,10 @@ TEST(SurfaceDetection, ASearchOnASubsampleAssignsEveryPoint) {
   EXPECT_NEAR(double(sub.surfaces.size()), double(all.surfaces.size()), 3.0);
 }
 
-// After a search on a subsample (whose surfaces were fitted there), the
-// whole scan's fit can skip the fit before the re-assignment: half the fits,
-// the same surfaces within a small fraction of epsilon, the same points.
+// After a search on a subsample, whose surfaces were fitted there and given
+// every point of the scan (in connected patches), the whole scan's fit runs
+// once, without a re-assignment: half the fits of fit, re-assign, fit; the
+// same surfaces within a small fraction of epsilon, the same points.
 TEST(SurfaceDetection, SurfacesFittedOnASubsampleAreAssignedThenFittedOnce) {
   const Scan scan = readScan(dataDir() / "housing_complex" / "scan_noisy.ply");
   DetectOptions o;
@@ -816,7 +817,7 @@ TEST(SurfaceDetection, SurfacesFittedOnASubsampleAreAssignedThenFittedOnce) {
   ASSERT_TRUE(sub.ok()) << sub.message;
   SurfaceFitOptions both, after;
   both.removeRedundant = both.splitSteps = after.removeRedundant = after.splitSteps = false;
-  after.fitBeforeReassign = false;
+  after.reassign = false;
   DetectionResult twice = sub, once = sub;
   FitMemo memoTwice(scan.cloud), memoOnce(scan.cloud);
   fitSurfaces(scan.cloud, twice, both, &memoTwice);
