@@ -55,10 +55,21 @@
 //                 in floats for viewers, NNN/scan.xyz with every digit) and
 //                 tree (NNN/tree.json) are written, to look at a weak part
 //                 with `csgvox eval` or run it again with `csgvox` (from
-//                 scan.xyz, which gives the run's tree but for the last bits
-//                 of the normals, which reading scales to unit length),
+//                 scan.xyz when the normals were given, which gives the
+//                 run's tree but for the last bits of the normals, which
+//                 reading scales to unit length),
 //                 and the IoU's samples where they disagree: NNN/extra.ply in
-//                 the tree only, NNN/missing.ply in the part only
+//                 the tree only, NNN/missing.ply in the part only. A scan
+//                 whose normals were estimated (scanner rows, --estimate-normals)
+//                 also leaves NNN/raw.xyz, its points before the reading step:
+//                 `csgvox NNN/raw.xyz` runs it as the benchmark did (its
+//                 scan.xyz holds the estimated normals, which the main job
+//                 would take as given and skip what it does for raw scans)
+//
+// Each row's note ends with the volume only in the tree and only in the
+// part, then the voxel labels' own IoU against the part (labels IoU, and
+// their extra and missing volume): where the labels are already wrong, the
+// tree follows them; where they are right, the error is the tree's.
 //
 // Each model runs in a child process of its own, so a crash or a runaway
 // model becomes a row with its reason and the run goes on. The children's
@@ -232,7 +243,9 @@ Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::
 
 // The scanner model's scan of the mesh at `path`, with normals (the
 // scanner's, or estimated as for a file without them).
-Scan scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note) {
+// `raw` receives the points as scanned, before the reading step.
+Scan scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note,
+                 PointCloud& raw) {
   const TriangleMesh mesh = readMesh(path);
   const MeshCaster caster(mesh);
   ScannerOptions so = opt.scan;
@@ -246,6 +259,8 @@ Scan scannerScan(const Options& opt, const std::filesystem::path& path, std::str
   std::snprintf(buf, sizeof buf, "scan %.2f s at %d px, %zu mixed, %zu outliers; ", seconds,
                 s.resolution, s.counts.mixed, s.counts.outliers);
   note = buf;
+  raw.points = s.cloud.points;
+  raw.normals = s.cloud.normals;
   return scanFromArrays(s.cloud.points, s.cloud.normals, path.string());
 }
 
@@ -256,9 +271,10 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
   try {
     std::string scanNote;
     PointCloud scan;
+    PointCloud raw;  // the scanner's points as a file of them would hold them
     bool estimatedNormals = false;
     if (kind == ScanKind::Scanner) {
-      Scan scanned = scannerScan(opt, path, scanNote);
+      Scan scanned = scannerScan(opt, path, scanNote, raw);
       estimatedNormals = scanned.info.normalsEstimated;
       scan = std::move(scanned.cloud);
     } else {
@@ -274,9 +290,10 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
       for (Vec3& p : scan.points) p += Vec3(gauss(rng), gauss(rng), gauss(rng));
     }
     if (kind == ScanKind::Uniform && opt.estimateNormals) {
-      Scan raw = scanFromArrays(std::move(scan.points), {}, path.string());
-      estimatedNormals = raw.info.normalsEstimated;
-      scan = std::move(raw.cloud);
+      raw.points = scan.points;
+      Scan read = scanFromArrays(std::move(scan.points), {}, path.string());
+      estimatedNormals = read.info.normalsEstimated;
+      scan = std::move(read.cloud);
     }
     const std::filesystem::path keep =
         opt.keep.empty() ? opt.keep
@@ -285,6 +302,10 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
       std::filesystem::create_directories(keep);
       writePointCloudPly(keep / "scan.ply", scan);  // floats, for viewers
       writePointCloudXyz(keep / "scan.xyz", scan);  // every digit, to run it again
+      // A scan read as raw points (outliers removed, normals estimated) is
+      // run again from those points: the scan above holds estimated normals,
+      // which the main job would take as given.
+      if (!raw.empty()) writePointCloudXyz(keep / "raw.xyz", raw);
     }
 
     ReconstructOptions ro;
@@ -343,9 +364,32 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
         [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1,
         keep.empty() ? nullptr : &only);
     res.iou = o.iou;
-    char where[96];
-    std::snprintf(where, sizeof where, "; extra %.1f %%, missing %.1f %% of the part's volume",
-                  100.0 * o.onlyA, 100.0 * o.onlyB);
+    // The voxel labels against the part, on the same number of samples over
+    // the part and the grid: how much of the tree's error the labels hold
+    // already (a voxel's width of it on every face is the grid's own).
+    const VoxelGrid& grid = rec.grid;
+    Aabb labelBox = meshBox;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 c((corner & 1) ? grid.dims()[0] : 0, (corner & 2) ? grid.dims()[1] : 0,
+                   (corner & 4) ? grid.dims()[2] : 0);
+      labelBox.extend(Vec3(grid.origin() + grid.axes() * (c * grid.voxelSize())));
+    }
+    const auto labelled = [&](const Vec3& p) {
+      const Vec3 g = grid.toGrid(p);
+      const auto& d = grid.dims();
+      if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.z() >= 0.0 && g.x() < d[0] && g.y() < d[1] &&
+            g.z() < d[2])) {
+        return false;
+      }
+      return rec.labels.inside.test(grid.index(int(g.x()), int(g.y()), int(g.z())));
+    };
+    const Overlap l = sampledOverlap(
+        labelBox, labelled, [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1);
+    char where[192];
+    std::snprintf(where, sizeof where,
+                  "; extra %.1f %%, missing %.1f %% of the part's volume; labels IoU %.4f "
+                  "(extra %.1f %%, missing %.1f %%)",
+                  100.0 * o.onlyA, 100.0 * o.onlyB, l.iou, 100.0 * l.onlyA, 100.0 * l.onlyB);
     res.note += where;
     if (!keep.empty()) {
       writePointCloudPly(keep / "extra.ply", only.first);
