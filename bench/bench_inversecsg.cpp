@@ -60,11 +60,13 @@
 //                 reading scales to unit length),
 //                 and the IoU's samples where they disagree: NNN/extra.ply in
 //                 the tree only, NNN/missing.ply in the part only. A scan
-//                 whose normals were estimated (scanner rows, --estimate-normals)
-//                 also leaves NNN/raw.xyz, its points before the reading step:
+//                 read as a file of raw points (scanner rows, --estimate-normals)
+//                 also leaves NNN/raw.xyz, its points (and the scanner's
+//                 normals, if it gave them) before the reading step:
 //                 `csgvox NNN/raw.xyz` runs it as the benchmark did (its
-//                 scan.xyz holds the estimated normals, which the main job
-//                 would take as given and skip what it does for raw scans)
+//                 scan.xyz holds the normals the reading gave it, which the
+//                 main job would take as given, skipping what it does for
+//                 raw scans)
 //
 // Each row's note ends with the volume only in the tree and only in the
 // part, then the voxel labels' own IoU against the part (labels IoU, and
@@ -241,27 +243,23 @@ Overlap sampledOverlap(const Aabb& box, InA&& inA, InB&& inB, int samples, std::
   return o;
 }
 
-// The scanner model's scan of the mesh at `path`, with normals (the
-// scanner's, or estimated as for a file without them).
-// `raw` receives the points as scanned, before the reading step.
-Scan scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note,
-                 PointCloud& raw) {
+// The scanner model's scan of the mesh at `path`, as a file of it would hold
+// it (normals only with --scanner-normals scanner), before the reading step.
+PointCloud scannerScan(const Options& opt, const std::filesystem::path& path, std::string& note) {
   const TriangleMesh mesh = readMesh(path);
   const MeshCaster caster(mesh);
   ScannerOptions so = opt.scan;
   so.points = opt.points;
   so.seed = opt.seed;
   const auto t0 = std::chrono::steady_clock::now();
-  const ScannerScan s = scanPart(caster, so);
+  ScannerScan s = scanPart(caster, so);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   char buf[160];
   std::snprintf(buf, sizeof buf, "scan %.2f s at %d px, %zu mixed, %zu outliers; ", seconds,
                 s.resolution, s.counts.mixed, s.counts.outliers);
   note = buf;
-  raw.points = s.cloud.points;
-  raw.normals = s.cloud.normals;
-  return scanFromArrays(s.cloud.points, s.cloud.normals, path.string());
+  return std::move(s.cloud);
 }
 
 // Runs one model; never throws.
@@ -271,12 +269,12 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
   try {
     std::string scanNote;
     PointCloud scan;
-    PointCloud raw;  // the scanner's points as a file of them would hold them
+    // A scan to read as a file of it is read (outliers removed, missing
+    // normals estimated): the scanner's, or the uniform one without normals.
+    PointCloud raw;
     bool estimatedNormals = false;
     if (kind == ScanKind::Scanner) {
-      Scan scanned = scannerScan(opt, path, scanNote, raw);
-      estimatedNormals = scanned.info.normalsEstimated;
-      scan = std::move(scanned.cloud);
+      raw = scannerScan(opt, path, scanNote);
     } else {
       ReadOptions rd;
       rd.meshSamples = opt.points;
@@ -289,9 +287,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
       std::normal_distribution<double> gauss(0.0, sigma);
       for (Vec3& p : scan.points) p += Vec3(gauss(rng), gauss(rng), gauss(rng));
     }
-    if (kind == ScanKind::Uniform && opt.estimateNormals) {
-      raw.points = scan.points;
-      Scan read = scanFromArrays(std::move(scan.points), {}, path.string());
+    if (kind == ScanKind::Uniform && opt.estimateNormals) raw.points = std::move(scan.points);
+    if (!raw.empty()) {
+      Scan read = scanFromArrays(raw.points, raw.normals, path.string());
       estimatedNormals = read.info.normalsEstimated;
       scan = std::move(read.cloud);
     }
@@ -302,9 +300,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
       std::filesystem::create_directories(keep);
       writePointCloudPly(keep / "scan.ply", scan);  // floats, for viewers
       writePointCloudXyz(keep / "scan.xyz", scan);  // every digit, to run it again
-      // A scan read as raw points (outliers removed, normals estimated) is
-      // run again from those points: the scan above holds estimated normals,
-      // which the main job would take as given.
+      // A scan read as raw points is run again from them: the scan above
+      // holds the normals the reading gave it, which the main job would take
+      // as given.
       if (!raw.empty()) writePointCloudXyz(keep / "raw.xyz", raw);
     }
 
