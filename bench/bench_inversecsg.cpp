@@ -373,13 +373,8 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
       labelBox.extend(Vec3(grid.origin() + grid.axes() * (c * grid.voxelSize())));
     }
     const auto labelled = [&](const Vec3& p) {
-      const Vec3 g = grid.toGrid(p);
-      const auto& d = grid.dims();
-      if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.z() >= 0.0 && g.x() < d[0] && g.y() < d[1] &&
-            g.z() < d[2])) {
-        return false;
-      }
-      return rec.labels.inside.test(grid.index(int(g.x()), int(g.y()), int(g.z())));
+      const std::size_t v = grid.voxelOf(p);
+      return v != VoxelGrid::npos && rec.labels.inside.test(v);
     };
     const Overlap l = sampledOverlap(
         labelBox, labelled, [&](const Vec3& p) { return solid->contains(p); }, opt.iouSamples, 1);

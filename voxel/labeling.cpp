@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <numeric>
 #include <stdexcept>
@@ -15,17 +14,6 @@
 
 namespace csgvox {
 namespace {
-
-constexpr std::size_t kNoVoxel = std::numeric_limits<std::size_t>::max();
-
-// Index of the voxel holding p, or kNoVoxel outside the grid.
-std::size_t voxelOf(const VoxelGrid& grid, const Vec3& p) {
-  const Vec3 g = grid.toGrid(p);
-  const auto& d = grid.dims();
-  const int i = int(std::floor(g.x())), j = int(std::floor(g.y())), k = int(std::floor(g.z()));
-  if (i < 0 || j < 0 || k < 0 || i >= d[0] || j >= d[1] || k >= d[2]) return kNoVoxel;
-  return grid.index(i, j, k);
-}
 
 // Wu et al. §4.1: outside when more than epsilon of the K nearest points
 // have normals pointing towards the point.
@@ -230,8 +218,8 @@ std::vector<std::size_t> thinWallVoxels(const VoxelGrid& grid, const PointCloud&
   std::vector<std::pair<std::size_t, std::uint32_t>> byVoxel;  // (voxel, point)
   byVoxel.reserve(scan.size());
   for (std::uint32_t i = 0; i < scan.size(); ++i) {
-    const std::size_t v = voxelOf(grid, scan.points[i]);
-    if (v != kNoVoxel && !in[v]) byVoxel.emplace_back(v, i);
+    const std::size_t v = grid.voxelOf(scan.points[i]);
+    if (v != VoxelGrid::npos && !in[v]) byVoxel.emplace_back(v, i);
   }
   std::sort(byVoxel.begin(), byVoxel.end());
   std::vector<std::size_t> starts;
@@ -267,8 +255,8 @@ std::vector<std::size_t> thinWallVoxels(const VoxelGrid& grid, const PointCloud&
                           n.normalize();
                           bool caught = false;
                           for (double s : {0.5, 1.0, 1.5, 2.0, 2.5}) {
-                            const std::size_t w = voxelOf(grid, p - s * h * n);
-                            caught = caught || (w != kNoVoxel && w != v && in[w]);
+                            const std::size_t w = grid.voxelOf(p - s * h * n);
+                            caught = caught || (w != VoxelGrid::npos && w != v && in[w]);
                           }
                           if (caught) continue;
                           for (double s : {0.25, 0.5}) {
@@ -303,8 +291,8 @@ VoxelLabels label(const VoxelGrid& grid, const PointCloud& scan, const LabelOpti
   VoxelLabels labels;
   labels.occupied = VoxelSet(grid.voxelCount());
   for (const Vec3& p : scan.points) {
-    const std::size_t v = voxelOf(grid, p);
-    if (v != kNoVoxel) labels.occupied.set(v);
+    const std::size_t v = grid.voxelOf(p);
+    if (v != VoxelGrid::npos) labels.occupied.set(v);
   }
   labels.inside = VoxelSet(grid.voxelCount());
   for (std::size_t v = 0; v < in.size(); ++v) {

@@ -167,15 +167,10 @@ class BoreOpener {
       for (double u = -b.interior; u <= b.interior; u += 0.5 * h_) {
         for (double w = -b.interior; w <= b.interior; w += 0.5 * h_) {
           if (u * u + w * w > b.interior * b.interior) continue;
-          const Vec3 g = grid_.toGrid(centre + u * frame.col(0) + w * frame.col(1));
-          const int i = int(std::floor(g.x())), j = int(std::floor(g.y())),
-                    k = int(std::floor(g.z()));
-          if (i < 0 || j < 0 || k < 0 || i >= grid_.dims()[0] || j >= grid_.dims()[1] ||
-              k >= grid_.dims()[2]) {
-            continue;
-          }
+          const std::size_t v = grid_.voxelOf(centre + u * frame.col(0) + w * frame.col(1));
+          if (v == VoxelGrid::npos) continue;
           ++total;
-          air += opened_.test(grid_.index(i, j, k)) ? 1 : 0;
+          air += opened_.test(v) ? 1 : 0;
         }
       }
       if (total == 0) return 0;  // out of the grid: no air met

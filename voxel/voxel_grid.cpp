@@ -36,6 +36,16 @@ VoxelGrid VoxelGrid::around(const OrientedBox& box, const GridOptions& options) 
   return VoxelGrid(origin, box.axes, size, dims);
 }
 
+std::size_t VoxelGrid::voxelOf(const Vec3& p) const {
+  const Vec3 g = toGrid(p);
+  // Compared before the cast: a point far off (or NaN) never reaches int.
+  if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.z() >= 0.0 && g.x() < dims_[0] && g.y() < dims_[1] &&
+        g.z() < dims_[2])) {
+    return npos;
+  }
+  return index(int(g.x()), int(g.y()), int(g.z()));
+}
+
 Vec3 VoxelGrid::center(std::size_t index) const {
   const std::size_t plane = std::size_t(dims_[0]) * dims_[1];
   const int k = int(index / plane);

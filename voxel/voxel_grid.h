@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <span>
 
 #include "core/oriented_box.h"
@@ -44,6 +45,12 @@ class VoxelGrid {
   Vec3 center(std::size_t index) const;
   /// Grid coordinates (in voxels, continuous) of a world point.
   Vec3 toGrid(const Vec3& p) const { return axes_.transpose() * (p - origin_) / voxelSize_; }
+  /// What voxelOf returns for a point outside the grid.
+  static constexpr std::size_t npos = std::numeric_limits<std::size_t>::max();
+  /// Linear index of the voxel holding the world point p (a point on a
+  /// shared face belongs to the voxel above it), or npos when p lies outside
+  /// the grid or is not finite.
+  std::size_t voxelOf(const Vec3& p) const;
   /// Range of voxel indices [lo, hi) per axis whose centres may lie in the
   /// world-space box `b` (clamped to the grid; empty when outside).
   void voxelRange(const Aabb& b, std::array<int, 3>& lo, std::array<int, 3>& hi) const;
