@@ -79,6 +79,32 @@ TEST(VoxelGrid, VoxelCentresAndIndicesRoundTrip) {
             1e-12);
 }
 
+TEST(VoxelGrid, VoxelOfFindsTheVoxelHoldingAPointAndNothingOutside) {
+  const VoxelGrid grid(Vec3(-1, 0, 2), rotation(40, Vec3(0, 1, 1)), 0.5, {5, 4, 3});
+  const auto at = [&](double x, double y, double z) {
+    return Vec3(grid.origin() + grid.axes() * (Vec3(x, y, z) * grid.voxelSize()));
+  };
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < 4; ++j) {
+      for (int i = 0; i < 5; ++i) {
+        EXPECT_EQ(grid.voxelOf(grid.center(i, j, k)), grid.index(i, j, k));
+        // Near its lower corner and near its upper one, still inside.
+        EXPECT_EQ(grid.voxelOf(at(i + 0.01, j + 0.01, k + 0.01)), grid.index(i, j, k));
+        EXPECT_EQ(grid.voxelOf(at(i + 0.99, j + 0.99, k + 0.99)), grid.index(i, j, k));
+      }
+    }
+  }
+  // Just outside each face, far away, and not a number: no voxel.
+  EXPECT_EQ(grid.voxelOf(at(-0.01, 1.5, 1.5)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(at(5.01, 1.5, 1.5)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(at(2.5, -0.01, 1.5)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(at(2.5, 4.01, 1.5)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(at(2.5, 1.5, -0.01)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(at(2.5, 1.5, 3.01)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(Vec3(1e300, -1e300, 1e300)), VoxelGrid::npos);
+  EXPECT_EQ(grid.voxelOf(Vec3(std::nan(""), 0.0, 2.0)), VoxelGrid::npos);
+}
+
 TEST(VoxelGrid, VoxelRangeHoldsEveryCentreInTheBox) {
   const VoxelGrid grid(Vec3::Zero(), Mat3::Identity(), 1.0, {10, 10, 10});
   Aabb b;
