@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <map>
 #include <random>
@@ -182,11 +181,8 @@ double wallCoverage(double wall, const VoxelGrid& grid, const VoxelSet& inside) 
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto hit = [&](const Vec3& p) {
-    const Vec3 g = grid.toGrid(p);
-    const auto& d = grid.dims();
-    const int i = int(std::floor(g.x())), j = int(std::floor(g.y())), k = int(std::floor(g.z()));
-    return i >= 0 && j >= 0 && k >= 0 && i < d[0] && j < d[1] && k < d[2] &&
-           inside.test(grid.index(i, j, k));
+    const std::size_t v = grid.voxelOf(p);
+    return v != VoxelGrid::npos && inside.test(v);
   };
   const int samples = 4000;
   int covered = 0;
