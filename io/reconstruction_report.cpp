@@ -90,6 +90,7 @@ Json voxelCounts(const Reconstruction& rec, const Construction& c) {
           {"holes_from_rims", rec.holesFromRims},
           {"bores_from_walls", rec.boresFromWalls},
           {"points_after_detection", rec.pointsAfterDetection},
+          {"unseen_face_points", rec.unseenFacePoints},
           {"bores_seen", rec.boreOpening.bores},
           {"bore_voxels_opened", rec.boreOpening.voxels},
           {"hypotheses", rec.hypotheses.candidates.size()},

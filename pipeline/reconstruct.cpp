@@ -270,7 +270,23 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   LabelOptions lo = options.labels;
   lo.noise = out.detection.noise;
   lo.control = control;
-  out.labels = labelVoxels(out.grid, points, lo);
+  // The faces no view saw (the one a part stood on) are closed for the
+  // labels with points on the convex hull; the rest of the run keeps the scan.
+  const UnseenFaces unseen =
+      options.method == Method::Gp || !points.hasNormals()
+          ? UnseenFaces{}
+          : unseenHullFaces(points, 0.5 * out.grid.voxelSize(), options.unseen);
+  out.unseenFacePoints = unseen.points.size();
+  if (unseen.points.empty()) {
+    out.labels = labelVoxels(out.grid, points, lo);
+  } else {
+    PointCloud closed = points;
+    closed.points.insert(closed.points.end(), unseen.points.points.begin(),
+                         unseen.points.points.end());
+    closed.normals.insert(closed.normals.end(), unseen.points.normals.begin(),
+                          unseen.points.normals.end());
+    out.labels = labelVoxels(out.grid, closed, lo);
+  }
   if (!control.cancelled()) {
     out.boreOpening =
         openSeenBores(out.grid, scan, out.detection.surfaces, out.labels.inside, options.bores);
@@ -281,6 +297,9 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
       " inside (" + std::string(labelMethodName(options.labels.method)) + ")" +
       (onSubsample ? " from the " + std::to_string(points.size()) + " points detection searched"
                    : std::string()) +
+      (unseen.points.empty() ? std::string()
+                             : "; " + std::to_string(unseen.points.size()) +
+                                   " points close faces never seen") +
       (bores.voxels == 0
            ? std::string()
            : "; " + std::to_string(bores.voxels) + " opened in " + std::to_string(bores.bores) +

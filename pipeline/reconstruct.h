@@ -26,6 +26,7 @@
 #include "pipeline/hybrid_method.h"
 #include "primitives/hypotheses.h"
 #include "primitives/surface_detection.h"
+#include "primitives/unseen_faces.h"
 #include "voxel/description_sets.h"
 #include "voxel/labeling.h"
 #include "voxel/seen_bores.h"
@@ -64,6 +65,7 @@ struct ReconstructOptions {
   std::uint64_t seed = 1;      ///< seeds detection and hypotheses; same seed, same tree
   DetectOptions detect;        ///< surface detection (its seed is replaced by `seed`)
   LabelOptions labels;         ///< voxel labelling
+  UnseenFaceOptions unseen;    ///< labels closed over faces never seen (primitives/unseen_faces.h)
   BoreOpeningOptions bores;    ///< labels completed by the bores seen (voxel/seen_bores.h)
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
   HybridOptions hybrid;        ///< hybrid method: the repair search (its seed is set from `seed`)
@@ -156,6 +158,8 @@ struct Reconstruction {
   /// (DetectOptions::ransacPoints), the even subsample detection searched
   /// (the genetic baseline keeps all). Count.
   std::size_t pointsAfterDetection = 0;
+  /// Points added for the labels only, on hull faces no view saw (count)
+  std::size_t unseenFacePoints = 0;
   BoreOpening boreOpening;  ///< inside labels turned outside in the bores seen
   VoxelLabels labels;
   Method method = Method::Voxel;   ///< the method asked for

@@ -1,8 +1,8 @@
 // Labels completed by the bores the detection saw (voxel/seen_bores.h): a
 // bore seen near its ends is opened along its length, a branch seen near its
-// mouth is opened into the run's bore, and nothing is opened where points
-// show material across a bore or where the scan does not show how deep a
-// hole goes.
+// mouth is opened into the run's bore, a hole through a face never seen to
+// the outside or down to a plane across it, and nothing is opened where
+// points show material across a bore or close its far end.
 
 #include <gtest/gtest.h>
 
@@ -148,30 +148,71 @@ TEST(SeenBores, ABossStandingInARoundPocketStaysInside) {
   EXPECT_EQ(inside, before);
 }
 
-TEST(SeenBores, AHoleWhoseDepthIsNotSeenEndsWhereItWasSeen) {
-  const VoxelGrid grid = testGrid();
-  // A block z in [-30, 30]; a hole of radius 6 seen from its mouth at
-  // z = 30 down to z = 20, its floor unseen. Past z = 20 nothing shows
-  // whether the hole goes on; the outside below the block is no evidence.
-  // The labels have the seen stretch right.
-  VoxelSet inside = labelsWhere(grid, [](const Vec3& p) {
-    return std::abs(p.z()) < 30.0 && (p.z() < 20.0 || p.head<2>().norm() > 6.0);
-  });
+// A block z in [-30, 30] with a hole of radius 6 seen from its mouth at
+// z = 30 down to z = 20, its floor unseen; the labels have the seen stretch
+// right and the rest of the block inside.
+struct DeepHole {
+  VoxelGrid grid = testGrid();
   Scene scene;
-  scene.wall(Vec3::Zero(), Vec3::UnitZ(), 6.0, 20.0, 30.0, 800, true);
-  const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
+  VoxelSet inside;
+  DeepHole() {
+    inside = labelsWhere(grid, [](const Vec3& p) {
+      return std::abs(p.z()) < 30.0 && (p.z() < 20.0 || p.head<2>().norm() > 6.0);
+    });
+    scene.wall(Vec3::Zero(), Vec3::UnitZ(), 6.0, 20.0, 30.0, 800, true);
+  }
+  // Inside labels of the hole's axis region: below z (true) or above it.
+  void expectHoleOpenDownTo(double z) const {
+    for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
+      const Vec3 c = grid.center(v);
+      if (c.head<2>().norm() >= 5.5 || std::abs(c.z()) > 30.0) continue;
+      if (c.z() > z + 0.5) {
+        EXPECT_FALSE(inside.test(v)) << c.transpose();
+      } else if (c.z() < z - 0.5) {
+        EXPECT_TRUE(inside.test(v)) << c.transpose();
+      }
+    }
+  }
+};
+
+TEST(SeenBores, AHoleWhoseFarFaceIsSeenClosedEndsWhereItWasSeen) {
+  // The block's bottom face seen under the hole: the hole is blind, its
+  // floor somewhere unseen; the labels are left as the points give them.
+  DeepHole hole;
+  hole.scene.disc(Vec3(0, 0, -30), -Vec3::UnitZ(), 6.0, 150);
+  const BoreOpening done = openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
   EXPECT_EQ(done.bores, 1u);
   EXPECT_EQ(done.extended, 0u);
   EXPECT_EQ(done.voxels, 0u);
-  for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
-    const Vec3 c = grid.center(v);
-    if (c.head<2>().norm() >= 6.0 || std::abs(c.z()) > 30.0) continue;
-    if (c.z() > 20.5) {
-      EXPECT_FALSE(inside.test(v)) << c.transpose();
-    } else if (c.z() < 19.5) {
-      EXPECT_TRUE(inside.test(v)) << c.transpose();
-    }
-  }
+  hole.expectHoleOpenDownTo(20.0);
+}
+
+TEST(SeenBores, AHoleThroughAFaceNeverSeenIsOpenedToTheOutside) {
+  // Nothing seen below the hole (the face the part stood on): the labels
+  // close that face only where it is material, so past the block is the
+  // outside, and the hole goes through.
+  DeepHole hole;
+  const BoreOpening done = openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
+  EXPECT_EQ(done.bores, 1u);
+  EXPECT_EQ(done.extended, 1u);
+  hole.expectHoleOpenDownTo(-31.0);
+}
+
+TEST(SeenBores, AHoleEndsAtAPlaneAcrossItsAxis) {
+  // A face of the part at z = 5 facing up (the top of a step the hole's
+  // boss stands on): the hole's floor is taken there.
+  DeepHole hole;
+  Surface step;
+  step.shape = PlaneSurface{Vec3::UnitZ(), 5.0};
+  hole.scene.surfaces.push_back(step);
+  // A plane across the axis facing down is no floor of a hole from above.
+  Surface under;
+  under.shape = PlaneSurface{-Vec3::UnitZ(), -10.0};
+  hole.scene.surfaces.push_back(under);
+  const BoreOpening done = openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
+  EXPECT_EQ(done.extended, 0u);
+  EXPECT_GT(done.voxels, 0u);
+  hole.expectHoleOpenDownTo(5.0);
 }
 
 // A tee: a run bore of radius 8 along x (seen near both ends) and a branch

@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -13,6 +14,8 @@ namespace csgvox {
 namespace {
 
 constexpr int kSectors = 12;
+// cos(15 degrees): a plane this close to across a bore's axis may be its floor.
+constexpr double kFloorCosine = 0.9659258262890683;
 
 // A concave cylinder seen all around its axis, and what lies inside it.
 struct Bore {
@@ -24,6 +27,7 @@ struct Bore {
   double interior;             // radius within which points are material across the bore
   std::vector<double> depths;  // sorted axial positions of the points within `interior`
   std::vector<std::pair<double, unsigned>> wall;  // the inliers' depths and sector bits, sorted
+  bool crossed = false;  // material seen across it somewhere along its seen stretch
 };
 
 // The bore of a surface, or false when it is none: a concave cylinder at
@@ -130,7 +134,7 @@ class BoreOpener {
 
   // Along the stretch the inliers span, every run of slabs whose wall was
   // not seen all around and that no points close.
-  std::size_t openSeen(const Bore& b) {
+  std::size_t openSeen(Bore& b) {
     std::size_t n = 0;
     const double step = 0.5 * h_;
     double runStart = 0.0;
@@ -138,7 +142,9 @@ class BoreOpener {
     for (double t = b.lo;; t += step) {
       const bool last = t >= b.hi;
       const double at = std::min(t, b.hi);
-      const bool isOpen = !wallSeen(b, at) && !closed(b, at);
+      const bool across = closed(b, at);
+      b.crossed = b.crossed || across;
+      const bool isOpen = !wallSeen(b, at) && !across;
       if (isOpen && !inRun) runStart = at, inRun = true;
       if (inRun && (!isOpen || last)) {
         const double end = isOpen ? at : at - step;
@@ -152,16 +158,45 @@ class BoreOpener {
     return n;
   }
 
-  // Past the end at depth `end` in direction dir (+1 or -1): through
-  // voxels that no floor closes, into a bore's air (another bore opened by
-  // openSeen: the outside beyond the part is no evidence, since the face a
-  // part stood on may be unseen). Returns the voxels opened (0 when the
-  // extension meets a floor or leaves the grid first).
-  std::size_t extend(const Bore& b, double end, int dir, bool& reached) {
+  // The depth of the first plane past the end at depth `end` in direction
+  // dir that could be the bore's floor: across the axis (within 15 degrees),
+  // its outward normal facing back into the bore. Infinite (dir's sign) when
+  // there is none. A hole that ends short of where a view would see its
+  // floor most often ends at a face the part shows elsewhere (a hub's hole
+  // at the top of the block it stands on).
+  static double floorPast(const Bore& b, double end, int dir,
+                          std::span<const PlaneSurface> planes) {
+    double best = dir * std::numeric_limits<double>::infinity();
+    for (const PlaneSurface& p : planes) {
+      const double c = p.normal.dot(b.axis);
+      if (std::abs(c) < kFloorCosine || dir * c > 0.0) continue;
+      const double t = (p.offset - p.normal.dot(b.point)) / c;
+      if (dir * (t - end) > 0.0 && dir * (t - best) < 0.0) best = t;
+    }
+    return best;
+  }
+
+  // Past the end at depth `end` in direction dir (+1 or -1): through a plug
+  // of inside voxels that no floor closes, into air (a slab of the bore's
+  // disc at least airShare outside: another bore's opened air, or the
+  // outside of the part). The outside counts because a face no view saw
+  // (the one a part stood on) is closed for the labels only where it is
+  // material, seen from behind (primitives/unseen_faces.h): under a bore
+  // whose floor no view saw, it is left open. It does not count for a bore
+  // with material across it along its seen stretch (a boss standing in a
+  // round pocket stands on its floor). Returns the voxels opened (0 when the
+  // extension meets a floor, leaves the grid, or meets no plug within a
+  // voxel of the end: the bore opens there already); a plane across the
+  // axis, facing back into the bore, ends it first (floorPast).
+  std::size_t extend(const Bore& b, double end, int dir, std::span<const PlaneSurface> planes,
+                     bool& reached) {
     reached = false;
     const Mat3 frame = frameFromAxis(b.axis);
+    const double floorAt = floorPast(b, end, dir, planes);
+    bool plug = false;
     for (double t = end + 0.5 * dir * h_;; t += 0.5 * dir * h_) {
       if (closed(b, t)) return 0;
+      if (dir * (t - floorAt) >= 0.0) return open(b, std::min(end, floorAt), std::max(end, floorAt));
       std::size_t total = 0, air = 0;
       const Vec3 centre = b.point + t * b.axis;
       for (double u = -b.interior; u <= b.interior; u += 0.5 * h_) {
@@ -170,13 +205,17 @@ class BoreOpener {
           const std::size_t v = grid_.voxelOf(centre + u * frame.col(0) + w * frame.col(1));
           if (v == VoxelGrid::npos) continue;
           ++total;
-          air += opened_.test(v) ? 1 : 0;
+          air += opened_.test(v) || (!b.crossed && !inside_.test(v)) ? 1 : 0;
         }
       }
       if (total == 0) return 0;  // out of the grid: no air met
-      if (double(air) >= o_.airShare * double(total)) {
+      if (double(air) < o_.airShare * double(total)) {
+        plug = true;
+      } else if (plug) {
         reached = true;
         return open(b, std::min(end, t), std::max(end, t));
+      } else if (std::abs(t - end) > h_) {
+        return 0;
       }
     }
   }
@@ -202,13 +241,17 @@ BoreOpening openSeenBores(const VoxelGrid& grid, const PointCloud& scan,
     if (boreOf(s, scan, grid.voxelSize(), options, b)) bores.push_back(std::move(b));
   }
   out.bores = bores.size();
+  std::vector<PlaneSurface> planes;
+  for (const Surface& s : surfaces) {
+    if (const auto* p = s.as<PlaneSurface>()) planes.push_back(*p);
+  }
   BoreOpener opener(grid, inside, options);
   // Every seen stretch first, so an extension can reach another bore's air.
-  for (const Bore& b : bores) out.voxels += opener.openSeen(b);
+  for (Bore& b : bores) out.voxels += opener.openSeen(b);
   for (const Bore& b : bores) {
     for (int dir : {-1, 1}) {
       bool reached = false;
-      out.voxels += opener.extend(b, dir < 0 ? b.lo : b.hi, dir, reached);
+      out.voxels += opener.extend(b, dir < 0 ? b.lo : b.hi, dir, planes, reached);
       out.extended += reached ? 1 : 0;
     }
   }

@@ -6,10 +6,13 @@
 /// bore or a hole: along the stretch its inliers span, its inside is air
 /// wherever its wall was not seen all around (where it was, the winding
 /// number is reliable and the labels stay) and no points show material
-/// across it (a floor, a boss standing in a round pocket). Past either end it is extended through a
-/// plug of inside labels that no floor closes, when the extension reaches air (a branch's bore into
-/// the run's, seen only near its mouth); otherwise it ends where it was seen, so a hole whose depth
-/// the scan does not show invents none.
+/// across it (a floor, a boss standing in a round pocket). Past either end
+/// it is extended through a plug of inside labels that no floor closes, when
+/// the extension reaches air: a branch's bore into the run's, seen only near
+/// its mouth, or a bore into the outside through a face no view saw, which
+/// the labels close only where it is material (primitives/unseen_faces.h).
+/// Otherwise it ends where it was seen, so a hole whose floor would show,
+/// or whose far end the scan shows closed, invents no depth.
 
 #include <cstddef>
 #include <span>
