@@ -5,6 +5,9 @@
 #include <limits>
 #include <nanoflann.hpp>
 #include <numeric>
+#include <vector>
+
+#include "core/statistics.h"
 
 namespace csgvox {
 namespace {
@@ -146,6 +149,19 @@ double kNearestBound(std::span<const Vec3> points, const Vec3& q,
   double worst = 0.0;
   for (std::uint32_t i : near) worst = std::max(worst, (points[i] - q).squaredNorm());
   return worst * (1.0 + 1e-9) + std::numeric_limits<double>::min();
+}
+
+double medianNearestDistance(std::span<const Vec3> points, const NearestNeighbors& nn,
+                             std::size_t samples) {
+  const std::size_t step = std::max<std::size_t>(1, points.size() / std::max<std::size_t>(1, samples));
+  std::vector<double> d;
+  std::vector<std::uint32_t> near;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < points.size(); i += step) {
+    nn.kNearest(points[i], 2, near, &d2);
+    if (d2.size() == 2) d.push_back(std::sqrt(d2[1]));
+  }
+  return d.empty() ? 0.0 : median(std::move(d));
 }
 
 }  // namespace csgvox

@@ -60,4 +60,11 @@ class NearestNeighbors {
 double kNearestBound(std::span<const Vec3> points, const Vec3& q,
                      std::span<const std::uint32_t> near, std::size_t k);
 
+/// The median distance from one of `points` to its nearest other one, over
+/// every max(1, n / samples)-th point (for an even count the upper middle
+/// value, as median() gives it). 0 for fewer than two points. `nn` must
+/// hold `points`.
+double medianNearestDistance(std::span<const Vec3> points, const NearestNeighbors& nn,
+                             std::size_t samples = 2000);
+
 }  // namespace csgvox

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/nearest_neighbors.h"
+#include "core/statistics.h"
 #include "primitives/surface_fit_internal.h"
 
 namespace csgvox {
@@ -45,29 +46,6 @@ struct Rim {
   double spacing = 0.0;               // of the face's points it was found among
   std::vector<std::uint32_t> points;  // the plane's inliers around the gap
 };
-
-// The middle value (the upper one of an even count); `values` not empty.
-double upperMedian(std::vector<double> values) {
-  const auto middle = values.begin() + std::ptrdiff_t(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
-// Median distance from one of `points` to its nearest other one, on at most
-// 2000 of them; `nn` holds `points`. (The thresholds below were measured
-// with this estimate: estimateSpacing's, on 4000 points with the mean of
-// the two middle values, moves borderline rims either way.)
-double medianSpacing(const std::vector<Vec3>& points, const NearestNeighbors& nn) {
-  const std::size_t step = std::max<std::size_t>(1, points.size() / 2000);
-  std::vector<double> d;
-  std::vector<std::uint32_t> near;
-  std::vector<double> d2;
-  for (std::size_t i = 0; i < points.size(); i += step) {
-    nn.kNearest(points[i], 2, near, &d2);
-    if (d2.size() == 2) d.push_back(std::sqrt(d2[1]));
-  }
-  return d.empty() ? 0.0 : upperMedian(std::move(d));
-}
 
 // The round gaps among the inliers of the coplanar plane surfaces `group`
 // (detection may split one face among several; the first holds the most
@@ -111,7 +89,10 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     hi = hi.cwiseMax(flat[k].head<2>());
   }
   const NearestNeighbors nn(flat);
-  const double spacing = medianSpacing(flat, nn);
+  // (The thresholds below were measured with this estimate on at most 2000
+  // points: estimateSpacing's, on 4000 with the mean of the two middle
+  // values, moves borderline rims either way.)
+  const double spacing = medianNearestDistance(flat, nn);
   if (!(spacing > 0.0)) return;
   double cell = spacing;
   const Vec2 size = hi - lo;
@@ -243,7 +224,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
       nn.kNearest(flat[k], 2, near, &d2);
       if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
     }
-    if (gaps.empty() || radius < options.minRadiusSpacings * upperMedian(std::move(gaps))) continue;
+    if (gaps.empty() || radius < options.minRadiusSpacings * median(std::move(gaps))) continue;
     taken.push_back({center, radius});
     ++stats.gaps;
     Rim r;

@@ -29,6 +29,7 @@ struct Facet {
 // other, with the edges it shares with other regions.
 struct Region {
   Vec3 normal = Vec3::Zero();  // area-weighted, unit
+  Vec3 e0, e1;                 // frameFromAxis(normal): the plane's lattice axes
   std::vector<std::pair<Vec3, Vec3>> boundary;
 };
 
@@ -100,7 +101,11 @@ Hull convexHull(const std::vector<Vec3>& points) {
     out.regions[r].normal += area[f] * byFace[f].normal;
     out.facets.push_back(byFace[f]);
   }
-  for (Region& r : out.regions) r.normal.normalize();
+  for (Region& r : out.regions) {
+    r.normal.normalize();
+    const Mat3 frame = frameFromAxis(r.normal);
+    r.e0 = frame.col(0), r.e1 = frame.col(1);
+  }
   for (const auto h : hull.halfedges()) {
     const std::size_t f = hull.face(h).idx(), g = hull.face(hull.opposite(h)).idx();
     if (!valid[f]) continue;
@@ -127,22 +132,6 @@ double boundarySeen(const Region& r, const NearestNeighbors& tree, double step, 
     }
   }
   return total == 0 ? 0.0 : double(seen) / double(total);
-}
-
-// Median distance from a point to its nearest other point, over an even
-// subset of at most 2000 points.
-double medianSpacing(const std::vector<Vec3>& points, const NearestNeighbors& tree) {
-  const std::size_t step = std::max<std::size_t>(1, points.size() / 2000);
-  std::vector<double> d;
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  for (std::size_t i = 0; i < points.size(); i += step) {
-    tree.kNearest(points[i], 2, idx, &d2);
-    if (d2.size() == 2) d.push_back(std::sqrt(d2[1]));
-  }
-  if (d.empty()) return 0.0;
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return d[d.size() / 2];
 }
 
 enum class Hit { Back, Front, None };
@@ -232,7 +221,7 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
   const Hull hull = convexHull(scan.points);
   if (hull.facets.empty()) return out;
   const NearestNeighbors tree(scan.points);
-  const double spacing = medianSpacing(scan.points, tree);
+  const double spacing = medianNearestDistance(scan.points, tree);
   if (!(spacing > 0.0)) return out;
   const double clearance = options.clearance * spacing;
 
@@ -242,14 +231,13 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
   // `step` apart around it.
   const double coarse = 2.0 * step;
   struct Sample {
-    Vec3 p, n, e0, e1;
+    Vec3 p;
     std::size_t region;
   };
   std::vector<Sample> samples;
   for (const Facet& f : hull.facets) {
-    const Vec3 normal = hull.regions[f.region].normal;
-    const Mat3 frame = frameFromAxis(normal);
-    const Vec3 e0 = frame.col(0), e1 = frame.col(1);
+    const Region& r = hull.regions[f.region];
+    const Vec3 &normal = r.normal, &e0 = r.e0, &e1 = r.e1;
     const double offset = normal.dot(f.v[0] + f.v[1] + f.v[2]) / 3.0;
     std::array<double, 3> u, v;
     for (int k = 0; k < 3; ++k) u[k] = f.v[k].dot(e0) / coarse, v[k] = f.v[k].dot(e1) / coarse;
@@ -266,7 +254,7 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
         const double b2 = ((u[1] - u[0]) * (j - v[0]) - (i - u[0]) * (v[1] - v[0])) / area2;
         if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
         const Vec3 p = offset * normal + (i * coarse) * e0 + (j * coarse) * e1;
-        samples.push_back({p, normal, e0, e1, f.region});
+        samples.push_back({p, f.region});
       }
     }
   }
@@ -290,8 +278,10 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
   tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t s) {
     const Sample& q = samples[s];
     if (!unseen[s] || !closable[q.region]) return;
-    const std::array<Vec3, 5> dirs = {-q.n, -ct * q.n + st * q.e0, -ct * q.n - st * q.e0,
-                                      -ct * q.n + st * q.e1, -ct * q.n - st * q.e1};
+    const Region& r = hull.regions[q.region];
+    const std::array<Vec3, 5> dirs = {-r.normal, -ct * r.normal + st * r.e0,
+                                      -ct * r.normal - st * r.e0, -ct * r.normal + st * r.e1,
+                                      -ct * r.normal - st * r.e1};
     int back = 0;
     for (const Vec3& d : dirs) {
       const Hit h = caster.cast(q.p, d);
@@ -303,15 +293,15 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
   for (std::size_t s = 0; s < samples.size(); ++s) {
     out.tested += unseen[s] ? 1 : 0;
     if (!keep[s]) continue;
-    const Sample& q = samples[s];
+    const Region& r = hull.regions[samples[s].region];
     for (const double a : {-0.5, 0.5}) {
       for (const double b : {-0.5, 0.5}) {
-        const Vec3 p = q.p + (a * step) * q.e0 + (b * step) * q.e1;
+        const Vec3 p = samples[s].p + (a * step) * r.e0 + (b * step) * r.e1;
         double nearest2 = 0.0;
         tree.nearest(p, &nearest2);
         if (nearest2 <= clearance * clearance) continue;
         out.points.points.push_back(p);
-        out.points.normals.push_back(q.n);
+        out.points.normals.push_back(r.normal);
       }
     }
   }

@@ -134,5 +134,26 @@ TEST(NearestNeighbors, SpatialOrderHandlesFlatAndDegenerateSets) {
   EXPECT_EQ(spatialOrder(line), (std::vector<std::uint32_t>{3, 1, 2, 0}));
 }
 
+TEST(NearestNeighbors, MedianNearestDistanceOfTwoSpacings) {
+  // Points 0.5 apart along a row, then rows 2 apart: every point's nearest
+  // other one lies 0.5 away, except the lone point of the last row (2).
+  std::vector<Vec3> p;
+  for (int row = 0; row < 3; ++row) {
+    for (int k = 0; k < 10; ++k) p.emplace_back(0.5 * k, 2.0 * row, 0.0);
+  }
+  p.emplace_back(0.0, 6.0, 0.0);
+  const NearestNeighbors nn(p);
+  EXPECT_DOUBLE_EQ(medianNearestDistance(p, nn), 0.5);
+  // Every 10th point (indices 0, 10, 20, 30: three at 0.5, the lone one at 2).
+  EXPECT_DOUBLE_EQ(medianNearestDistance(p, nn, 3), 0.5);
+  // Two pairs, 1 and 3 apart: the upper of the two middle values.
+  const std::vector<Vec3> pairs = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(10, 0, 0), Vec3(13, 0, 0)};
+  EXPECT_DOUBLE_EQ(medianNearestDistance(pairs, NearestNeighbors(pairs)), 3.0);
+  const std::vector<Vec3> lone = {Vec3::Zero()};
+  EXPECT_EQ(medianNearestDistance(lone, NearestNeighbors(lone)), 0.0);
+  const std::vector<Vec3> pair = {Vec3::Zero(), Vec3(0, 0, 3)};
+  EXPECT_DOUBLE_EQ(medianNearestDistance(pair, NearestNeighbors(pair)), 3.0);
+}
+
 }  // namespace
 }  // namespace csgvox
