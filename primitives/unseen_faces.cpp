@@ -264,12 +264,18 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
     tree.nearest(samples[s].p, &nearest2);
     unseen[s] = nearest2 > clearance * clearance ? 1 : 0;
   });
-  // Regions with unseen samples, and whether their boundary was seen.
-  std::vector<char> closable(hull.regions.size(), 0), checked(hull.regions.size(), 0);
+  // Regions mostly unseen, and whether their boundary was seen.
+  std::vector<std::size_t> total(hull.regions.size(), 0), unseenCount(hull.regions.size(), 0);
   for (std::size_t s = 0; s < samples.size(); ++s) {
-    const std::size_t r = samples[s].region;
-    if (!unseen[s] || checked[r]) continue;
-    checked[r] = 1;
+    ++total[samples[s].region];
+    unseenCount[samples[s].region] += unseen[s] ? 1 : 0;
+  }
+  std::vector<char> closable(hull.regions.size(), 0);
+  for (std::size_t r = 0; r < hull.regions.size(); ++r) {
+    if (unseenCount[r] == 0 ||
+        double(unseenCount[r]) < options.minUnseenShare * double(total[r])) {
+      continue;
+    }
     const double seen = boundarySeen(hull.regions[r], tree, spacing, clearance);
     closable[r] = seen >= options.minBoundarySeen ? 1 : 0;
   }
@@ -290,9 +296,16 @@ UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
     }
     keep[s] = back >= options.minBackHits ? 1 : 0;
   });
+  // Too few kept in a region: strays over air, not a face.
+  std::vector<std::size_t> kept(hull.regions.size(), 0);
+  for (std::size_t s = 0; s < samples.size(); ++s) kept[samples[s].region] += keep[s] ? 1 : 0;
   for (std::size_t s = 0; s < samples.size(); ++s) {
     out.tested += unseen[s] ? 1 : 0;
-    if (!keep[s]) continue;
+    const std::size_t k = kept[samples[s].region];
+    if (!keep[s] || k < std::size_t(std::max(0, options.minKept)) ||
+        double(k) < options.minKeptShare * double(unseenCount[samples[s].region])) {
+      continue;
+    }
     const Region& r = hull.regions[samples[s].region];
     for (const double a : {-0.5, 0.5}) {
       for (const double b : {-0.5, 0.5}) {

@@ -34,6 +34,18 @@ struct UnseenFaceOptions {
   /// lowest points all around; a hull facet that bridges a concavity spans
   /// air.
   double minBoundarySeen = 0.35;
+  /// ... and when at least this share of its lattice samples is unseen
+  /// (ratio): on a face no view saw nothing was seen but its walls' lowest
+  /// points; a seen face is unseen only in gaps of the sampling and in the
+  /// mouths of its holes (at most 0.45 of a region on the bundled scans).
+  double minUnseenShare = 0.5;
+  /// Of a closable region's unseen samples, those that must be kept (in the
+  /// material, as below) for any to be: at least this many (count) and this
+  /// share of them (ratio). A face no view saw is material over much of it;
+  /// a region over air (a mouth, a facet bridging a concavity) holds a
+  /// stray sample near its rim at most (1 in 180 on the bundled scans).
+  int minKept = 2;
+  double minKeptShare = 0.01;
   /// A ray meets the scan where a point lies within this many median
   /// spacings of it (ratio).
   double hitRadius = 1.5;

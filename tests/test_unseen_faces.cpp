@@ -1,8 +1,8 @@
 // Faces never seen, closed for the labels (primitives/unseen_faces.h): the
-// face a block stood on is covered, a fully seen block gains nothing, the
-// mouths of a bore through the unseen face and of a cup whose floor no view
-// saw stay open, and so do the air under a table and a tray whose floor
-// was seen sparsely.
+// face a block stood on is covered, a fully seen block gains nothing, nor
+// does a gap in the sampling of a seen face; the mouths of a bore through
+// the unseen face and of a cup whose floor no view saw stay open, and so do
+// the air under a table and a tray whose floor was seen sparsely.
 
 #include <gtest/gtest.h>
 
@@ -96,12 +96,47 @@ TEST(UnseenFaces, TheMouthOfACupWhoseFloorNoViewSawStaysOpen) {
   // from the top, 9 deep, whose wall a view at 55 degrees of elevation saw
   // down to z = 2 and whose floor no view saw: rays from its mouth meet its
   // wall from the front.
+  // The top is seen but for the mouth, so the rays are asked only when
+  // a region need not be mostly unseen.
   const auto inCup = [](const Vec3& p) { return p.z() > 1.0 && p.head<2>().norm() < 3.0; };
   PointCloud c = block(true, inCup);
   boreWall(c, 3.0, 2.0, 10.0);
-  const UnseenFaces u = unseenHullFaces(c, 0.25);
+  UnseenFaceOptions anyShare;
+  anyShare.minUnseenShare = 0.0;
+  const UnseenFaces u = unseenHullFaces(c, 0.25, anyShare);
   EXPECT_EQ(u.points.size(), 0u);
   EXPECT_GT(u.tested, 0u);
+}
+
+TEST(UnseenFaces, AGapInTheSamplingOfASeenFaceStaysOpen) {
+  // Every face seen, but a disc of radius 1.5 of the top without points:
+  // rays from it go through the block and meet its bottom from behind, as
+  // from a face no view saw; but the top is seen nearly everywhere else.
+  const auto inGap = [](const Vec3& p) {
+    return p.z() > 5.0 && (p.head<2>() - Eigen::Vector2d(4.0, 3.0)).norm() < 1.5;
+  };
+  const PointCloud c = block(true, inGap);
+  const UnseenFaces u = unseenHullFaces(c, 0.25);
+  EXPECT_GT(u.tested, 0u);
+  EXPECT_EQ(u.points.size(), 0u);
+  UnseenFaceOptions anyShare;
+  anyShare.minUnseenShare = 0.0;
+  EXPECT_GT(unseenHullFaces(c, 0.25, anyShare).points.size(), 0u);  // what the test guards
+}
+
+TEST(UnseenFaces, TooFewSamplesKeptInARegionCloseNothing) {
+  // The face the block stood on keeps every sample the clearance leaves;
+  // asking for more than it has, or for more than all of its unseen
+  // samples, closes nothing.
+  const PointCloud c = block(false);
+  const UnseenFaces all = unseenHullFaces(c, 0.25);
+  ASSERT_GT(all.points.size(), 0u);
+  UnseenFaceOptions count;
+  count.minKept = int(all.points.size());  // 4 points per kept sample
+  EXPECT_EQ(unseenHullFaces(c, 0.25, count).points.size(), 0u);
+  UnseenFaceOptions share;
+  share.minKeptShare = 1.01;
+  EXPECT_EQ(unseenHullFaces(c, 0.25, share).points.size(), 0u);
 }
 
 // The four vertical sides of the box [lo, hi], outward normals.
