@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "core/union_find.h"
+
 namespace csgvox {
 namespace {
 
@@ -19,11 +21,6 @@ struct CellHash {
     return std::size_t(h);
   }
 };
-
-std::size_t findRoot(std::vector<std::size_t>& parent, std::size_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 }  // namespace
 

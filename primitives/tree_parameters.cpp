@@ -13,6 +13,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "core/union_find.h"
+
 namespace csgvox {
 namespace {
 
@@ -40,14 +42,6 @@ struct DirectionClass {
   std::vector<std::pair<double, std::size_t>> offsets[3];  // by side: inward, none, outward
   std::vector<std::pair<Eigen::Vector2d, std::size_t>> lines;
 };
-
-int findRoot(std::vector<int>& parent, int i) {
-  while (parent[std::size_t(i)] != i) {
-    parent[std::size_t(i)] = parent[std::size_t(parent[std::size_t(i)])];
-    i = parent[std::size_t(i)];
-  }
-  return i;
-}
 
 Mat3 rotationOf(const double* w) {
   const Vec3 v(w[0], w[1], w[2]);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/nearest_neighbors.h"
+#include "core/union_find.h"
 
 namespace csgvox {
 namespace {
@@ -40,11 +41,6 @@ struct Hull {
   std::vector<Facet> facets;
   std::vector<Region> regions;
 };
-
-std::size_t findRoot(std::vector<std::size_t>& parent, std::size_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 Hull convexHull(const std::vector<Vec3>& points) {
   using Mesh = CGAL::Surface_mesh<K::Point_3>;
