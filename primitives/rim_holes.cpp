@@ -34,6 +34,18 @@ constexpr double kCoplanar = 0.995;
 // A wall point's normal makes at least 45 degrees with the hole's axis
 // (|cos| at most this).
 constexpr double kAcrossAxis = 0.7;
+// A free point faces a plane's way when its normal is within about 45
+// degrees of the plane's (cosine at least this).
+constexpr double kFacing = 0.7;
+// The empty circles that tell a rim's sampling lie within this many radii
+// of its centre (ratio), and are at least this many (count).
+constexpr double kPeakWindow = 6.0;
+constexpr std::size_t kMinPeaks = 6;
+// A surface that meets a face at less than 30 degrees runs along it rather
+// than through it: the mean distance to it from two points a step either
+// side of the face, over the step, is then above this (cos 30 degrees; a
+// hole's wall gives about 0, a 90-degree countersink's cone 0.71).
+constexpr double kTangent = 0.87;
 // Fewest points that show a hole's bottom face or its wall.
 constexpr std::size_t kMinEvidence = 4;
 
@@ -65,6 +77,17 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     inliers.insert(inliers.end(), more.begin(), more.end());
   }
   if (inliers.size() < options.minPlaneInliers) return;
+  // The face's points that no surface holds: within epsilon of the plane,
+  // facing its way. Estimated normals blend at a face's edges, so the strip
+  // along an edge, and the narrow land between a hole and an edge, often
+  // falls out of the plane's inliers; without it the rim of a hole near an
+  // edge is broken on that side, and the gap is not round.
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (result.assignment[i] >= 0) continue;
+    if (std::abs(cloud.points[i].dot(plane->normal) - plane->offset) > result.epsilon) continue;
+    if (cloud.normals[i].dot(plane->normal) < kFacing) continue;
+    inliers.push_back(std::uint32_t(i));
+  }
   // A face of a big scan is searched on every k-th of its points: the gaps
   // that matter are several spacings wide, and the distance map's cells
   // follow the spacing.
@@ -141,11 +164,12 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     double radius;
   };
   std::vector<Candidate> candidates;
+  std::vector<Candidate> peaks;  // every local maximum of the distance
   for (int y = 1; y + 1 < h; ++y) {
     for (int x = 1; x + 1 < w; ++x) {
       const std::size_t c = std::size_t(y) * std::size_t(w) + std::size_t(x);
       const double r = empty[c];
-      if (r < minRadius || r > maxRadius) continue;
+      if (r > maxRadius) continue;
       bool peak = true;
       for (int dy = -1; dy <= 1 && peak; ++dy) {
         for (int dx = -1; dx <= 1 && peak; ++dx) {
@@ -154,7 +178,9 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
           if (n != c && (empty[n] > r || (empty[n] == r && n < c))) peak = false;
         }
       }
-      if (peak) candidates.push_back({centre(x, y), r});
+      if (!peak) continue;
+      peaks.push_back({centre(x, y), r});
+      if (r >= minRadius) candidates.push_back({centre(x, y), r});
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
@@ -210,8 +236,11 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     std::array<double, kSectors> sorted = nearest;
     std::sort(sorted.begin(), sorted.end());
     const double radius = 0.5 * (sorted[kSectors / 2 - 1] + sorted[kSectors / 2]);
+    // (The nearest and the farthest sector left out: on a sparse rim one
+    // sector may hold its nearest point a spacing or more out.)
     if (radius > maxRadius ||
-        sorted.back() - sorted.front() > options.roundness * radius + 0.5 * spacing) {
+        sorted[kSectors - 2] - sorted[1] >
+            options.roundness * radius + options.roundnessSpacings * spacing) {
       continue;
     }
     // The rim: the points of the innermost ring; the gap must be wide for
@@ -225,6 +254,18 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
       if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
     }
     if (gaps.empty() || radius < options.minRadiusSpacings * median(std::move(gaps))) continue;
+    // The gaps of the sampling around it: a scanner's rows leave a regular
+    // pattern of empty circles one or two spacings wide (rows further apart
+    // than the points along a row, which the spacing measures); a hole is
+    // much wider than the typical empty circle beside it.
+    std::vector<double> around;
+    for (const Candidate& p : peaks) {
+      const double d = (p.center - center).norm();
+      if (d > radius + spacing && d < kPeakWindow * radius) around.push_back(p.radius);
+    }
+    if (around.size() >= kMinPeaks && radius < options.minPeakRatio * median(std::move(around))) {
+      continue;
+    }
     taken.push_back({center, radius});
     ++stats.gaps;
     Rim r;
@@ -252,7 +293,16 @@ bool explained(const DetectionResult& result, const Rim& rim) {
       const double a = 2.0 * std::numbers::pi * k / kSamples;
       const Vec3 p =
           rim.center + rim.radius * (std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1));
-      near += surfaceDistance(surface, p) <= tolerance ? 1 : 0;
+      if (surfaceDistance(surface, p) > tolerance) continue;
+      // A wall crosses the face steeply; a surface nearly tangent to it
+      // (a round fitted along the face's edge) passes near every point of
+      // a strip of the face and explains nothing.
+      const double step = 4.0 * tolerance;
+      const double slope = (surfaceDistance(surface, p + step * rim.normal) +
+                            surfaceDistance(surface, p - step * rim.normal)) /
+                           (2.0 * step);
+      if (slope > kTangent) continue;
+      ++near;
     }
     if (2 * near >= kSamples) return true;
   }
@@ -363,11 +413,20 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     std::vector<std::uint32_t> wall;
     double wallDepth = 0.0;
     std::size_t inside = 0;
+    // Faces looking the face's way above it: within the circle (a cap) and
+    // around it out to twice its radius.
+    std::vector<double> capHeights, aroundHeights;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
       const Vec3 d = cloud.points[i] - center;
       const double t = -d.dot(n);
-      if (t < -eps || t > deepest) continue;
+      if (t > deepest) continue;
       const double rho = lateral(d, n).norm();
+      if (t < -eps) {
+        if (cloud.normals[i].dot(n) < kFacing) continue;
+        if (rho < radius - band) capHeights.push_back(t);
+        if (rho > radius + 2.0 * band && rho < 2.0 * radius) aroundHeights.push_back(t);
+        continue;
+      }
       if (rho < radius - band && t > eps && (depth < 0.0 || t < depth - eps)) ++inside;
       if (result.assignment[i] >= 0 || std::abs(rho - radius) > band) continue;
       if (std::abs(cloud.normals[i].dot(n)) > kAcrossAxis) continue;
@@ -375,6 +434,20 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
       wallDepth = std::max(wallDepth, t);
     }
     if (inside > kMinEvidence + wall.size() / 10) continue;
+    // A boss standing through the face (a rod whose side no surface holds)
+    // leaves the same gap, with nothing inside it below the face; its top
+    // shows above the gap: a cap of points facing the face's way, at one
+    // height, with no face at that height around it (a face above the hole
+    // that reaches past it, as an overhang's would, is no cap).
+    if (capHeights.size() >= kMinEvidence) {
+      const double top = median(std::vector<double>(capHeights));
+      const auto atTop = [&](const std::vector<double>& heights) {
+        return std::size_t(std::count_if(heights.begin(), heights.end(),
+                                         [&](double t) { return std::abs(t - top) <= eps; }));
+      };
+      const std::size_t cap = atTop(capHeights);
+      if (cap >= kMinEvidence && 4 * atTop(aroundHeights) < cap) continue;
+    }
     if (depth < 0.0 && (wall.size() < kMinEvidence || wallDepth <= 2.0 * eps)) continue;
     used[a] = 1;
     Surface hole;

@@ -23,10 +23,19 @@ struct RimHoleOptions {
   double maxRadius = 0.15;
   /// A gap is round when the nearest points of its 12 angular sectors lie at
   /// distances from its centre that spread by at most this fraction of the
-  /// radius, plus half a point spacing (ratio). A slot's spread by its
-  /// length over its width; a square's by only 15 %: a square hole reads as a
-  /// round one.
+  /// radius (ratio), leaving out the nearest and the farthest sector (a
+  /// sparse rim may lack a point near the circle in one). A slot's spread by
+  /// its length over its width; a square's by only 15 %: a square hole reads
+  /// as a round one.
   double roundness = 0.2;
+  /// ... plus this many point spacings of the face (ratio).
+  double roundnessSpacings = 0.5;
+  /// A gap is a hole only when its radius is at least this many times the
+  /// median radius of the empty circles among the face's points around it
+  /// (ratio): a scanner's rows leave a regular pattern of gaps wider than
+  /// the spacing along a row, and a sparse patch of a face has gaps of
+  /// about 1.7 spacings.
+  double minPeakRatio = 2.5;
   /// Fewest inliers of a plane searched for gaps (count).
   std::size_t minPlaneInliers = 100;
 };

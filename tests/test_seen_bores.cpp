@@ -111,6 +111,44 @@ TEST(SeenBores, ABoreSeenNearItsEndsIsOpenedAlongItsLength) {
   EXPECT_GT(done.voxels, 7000u);  // ~ pi 8^2 x 44 = 8 850 voxels
 }
 
+TEST(SeenBores, ASmallHoleSeenAtItsEndsIsOpened) {
+  const VoxelGrid grid = testGrid();
+  // A through hole of radius 1.6 voxels (3.2 wide: about 8 voxel centres
+  // in each slab across it) in a block z in [-30, 30]; its wall is seen in
+  // the last 4 at either end, and the labels fill the rest. It opens along
+  // its length; below 1.5 voxels in radius nothing is opened.
+  const auto solid = [](const Vec3& p) {
+    return std::abs(p.z()) < 30.0 && std::abs(p.x()) < 15.0 && std::abs(p.y()) < 15.0;
+  };
+  const Vec3 axis(0.5, 0.5, 0.0);  // off the voxel centres' lattice by half a voxel
+  const double r = 1.6;
+  const auto inHole = [&](const Vec3& p) { return (p - axis).head<2>().norm() < r; };
+  const auto labels = [&] {
+    return labelsWhere(
+        grid, [&](const Vec3& p) { return solid(p) && (!inHole(p) || std::abs(p.z()) < 26.0); });
+  };
+  Scene scene;
+  scene.wall(axis, Vec3::UnitZ(), r, -30.0, -26.0, 120, true);
+  scene.wall(axis, Vec3::UnitZ(), r, 26.0, 30.0, 120, true);
+  scene.joinLastTwo();
+  VoxelSet inside = labels();
+  const BoreOpening done = openSeenBores(grid, scene.cloud, scene.surfaces, inside);
+  EXPECT_EQ(done.bores, 1u);
+  std::size_t filled = 0;
+  for (std::size_t v = 0; v < grid.voxelCount(); ++v) {
+    const Vec3 c = grid.center(v);
+    EXPECT_EQ(inside.test(v), solid(c) && !inHole(c)) << c.transpose();
+    filled += inHole(c) && std::abs(c.z()) < 26.0 ? 1 : 0;
+  }
+  EXPECT_EQ(done.voxels, filled);
+  EXPECT_GT(filled, 7u * 50u);
+  BoreOpeningOptions larger;
+  larger.minRadiusVoxels = 1.7;
+  VoxelSet unopened = labels();
+  EXPECT_EQ(openSeenBores(grid, scene.cloud, scene.surfaces, unopened, larger).bores, 0u);
+  EXPECT_EQ(unopened, labels());
+}
+
 TEST(SeenBores, ABoreSeenAlongItsWholeLengthIsLeftToThePoints) {
   const VoxelGrid grid = testGrid();
   // The same pipe with its bore's wall seen all along: a few inside voxels
@@ -180,7 +218,8 @@ TEST(SeenBores, AHoleWhoseFarFaceIsSeenClosedEndsWhereItWasSeen) {
   // floor somewhere unseen; the labels are left as the points give them.
   DeepHole hole;
   hole.scene.disc(Vec3(0, 0, -30), -Vec3::UnitZ(), 6.0, 150);
-  const BoreOpening done = openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
+  const BoreOpening done =
+      openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
   EXPECT_EQ(done.bores, 1u);
   EXPECT_EQ(done.extended, 0u);
   EXPECT_EQ(done.voxels, 0u);
@@ -192,7 +231,8 @@ TEST(SeenBores, AHoleThroughAFaceNeverSeenIsOpenedToTheOutside) {
   // close that face only where it is material, so past the block is the
   // outside, and the hole goes through.
   DeepHole hole;
-  const BoreOpening done = openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
+  const BoreOpening done =
+      openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
   EXPECT_EQ(done.bores, 1u);
   EXPECT_EQ(done.extended, 1u);
   hole.expectHoleOpenDownTo(-31.0);
@@ -209,7 +249,8 @@ TEST(SeenBores, AHoleEndsAtAPlaneAcrossItsAxis) {
   Surface under;
   under.shape = PlaneSurface{-Vec3::UnitZ(), -10.0};
   hole.scene.surfaces.push_back(under);
-  const BoreOpening done = openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
+  const BoreOpening done =
+      openSeenBores(hole.grid, hole.scene.cloud, hole.scene.surfaces, hole.inside);
   EXPECT_EQ(done.extended, 0u);
   EXPECT_GT(done.voxels, 0u);
   hole.expectHoleOpenDownTo(5.0);

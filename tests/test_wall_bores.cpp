@@ -232,7 +232,10 @@ TEST(WallBores, TheMainJobFindsTheHousingsCounterboresAndBoltHolesInItsScannerSc
   EXPECT_NE(with.detection.message.find("found from their walls"), std::string::npos);
   EXPECT_EQ(holesAt(with, 9.5), 4);
   EXPECT_GE(holesAt(with, 5.5), 3);
+  // RANSAC alone misses some. (The rims, looked for after the walls, find
+  // all eight on this scan by themselves; they are left out here.)
   options.wallBores = false;
+  options.rimHoles = false;
   const SurfacesAndCandidates without = detectAndFit(scan.cloud, options);
   ASSERT_TRUE(without.ok());
   EXPECT_EQ(without.wallBores.bores, 0u);

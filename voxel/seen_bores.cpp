@@ -31,12 +31,14 @@ struct Bore {
 };
 
 // The bore of a surface, or false when it is none: a concave cylinder at
-// least two voxels in radius with inliers in minSectors of the 12 sectors
+// least minRadiusVoxels in radius with inliers in minSectors of the 12 sectors
 // around its axis.
 bool boreOf(const Surface& s, const PointCloud& scan, double voxel, const BoreOpeningOptions& o,
             Bore& out) {
   const auto* c = s.as<CylinderSurface>();
-  if (c == nullptr || s.convex || s.inliers.empty() || c->radius < 2.0 * voxel) return false;
+  if (c == nullptr || s.convex || s.inliers.empty() || c->radius < o.minRadiusVoxels * voxel) {
+    return false;
+  }
   const Vec3 axis = c->axisDir.normalized();
   const Mat3 frame = frameFromAxis(axis);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -196,7 +198,8 @@ class BoreOpener {
     bool plug = false;
     for (double t = end + 0.5 * dir * h_;; t += 0.5 * dir * h_) {
       if (closed(b, t)) return 0;
-      if (dir * (t - floorAt) >= 0.0) return open(b, std::min(end, floorAt), std::max(end, floorAt));
+      if (dir * (t - floorAt) >= 0.0)
+        return open(b, std::min(end, floorAt), std::max(end, floorAt));
       std::size_t total = 0, air = 0;
       const Vec3 centre = b.point + t * b.axis;
       for (double u = -b.interior; u <= b.interior; u += 0.5 * h_) {

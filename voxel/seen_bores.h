@@ -30,6 +30,9 @@ struct BoreOpeningOptions {
   /// Of 12 sectors around the axis, those that must hold inliers for a bore,
   /// and in a slab one voxel thick for its wall to count as seen there (count).
   int minSectors = 10;
+  /// Smallest bore radius, in voxels (ratio): a hole 3 voxels wide holds
+  /// about 7 voxel centres in each slab across it.
+  double minRadiusVoxels = 1.5;
   /// A slab of the bore, one voxel thick, is closed (material across it)
   /// when the points inside its disc number at least this share of the bore
   /// wall's own points in a slab (ratio) ...
