@@ -61,14 +61,15 @@ struct Rim {
 
 // The round gaps among the inliers of the coplanar plane surfaces `group`
 // (detection may split one face among several; the first holds the most
-// points and stands for them): the largest empty circles among its points
+// points and stands for them) and the points of `unassigned` that
+// lie on the face: the largest empty circles among its points
 // (maxima of their distance map on a grid of one point spacing) whose edge
 // the points follow all around. An empty circle
 // does not need the face closed around it: a hole near the edge of a narrow
 // face, whose rim the scan breaks, still counts.
 void findRims(const PointCloud& cloud, const DetectionResult& result,
-              const std::vector<std::size_t>& group, const RimHoleOptions& options,
-              std::vector<Rim>& rims, RimHoleStats& stats) {
+              const std::vector<std::size_t>& group, const std::vector<std::uint32_t>& unassigned,
+              const RimHoleOptions& options, std::vector<Rim>& rims, RimHoleStats& stats) {
   const std::size_t s = group.front();
   const auto* plane = result.surfaces[s].as<PlaneSurface>();
   std::vector<std::uint32_t> inliers;
@@ -82,11 +83,10 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
   // along an edge, and the narrow land between a hole and an edge, often
   // falls out of the plane's inliers; without it the rim of a hole near an
   // edge is broken on that side, and the gap is not round.
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (result.assignment[i] >= 0) continue;
+  for (std::uint32_t i : unassigned) {
     if (std::abs(cloud.points[i].dot(plane->normal) - plane->offset) > result.epsilon) continue;
     if (cloud.normals[i].dot(plane->normal) < kFacing) continue;
-    inliers.push_back(std::uint32_t(i));
+    inliers.push_back(i);
   }
   // A face of a big scan is searched on every k-th of its points: the gaps
   // that matter are several spacings wide, and the distance map's cells
@@ -321,6 +321,10 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
   std::vector<Rim> rims;
   const std::size_t found = result.surfaces.size();
   std::vector<char> grouped(found, 0);
+  std::vector<std::uint32_t> unassigned;  // the points no surface holds
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (result.assignment[i] < 0) unassigned.push_back(std::uint32_t(i));
+  }
   for (std::size_t s = 0; s < found; ++s) {
     const auto* p = result.surfaces[s].as<PlaneSurface>();
     if (p == nullptr || grouped[s]) continue;
@@ -334,7 +338,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
       grouped[t] = 1;
       group.push_back(t);
     }
-    findRims(cloud, result, group, options, rims, stats);
+    findRims(cloud, result, group, unassigned, options, rims, stats);
   }
   if (rims.empty()) return stats;
   std::vector<char> used(rims.size(), 0);

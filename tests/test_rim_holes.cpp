@@ -59,10 +59,16 @@ struct FaceScan {
     std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), z(z0, z1);
     for (int k = 0; k < count; ++k) {
       const double a = angle(rng);
-      cloud.points.emplace_back(cx + r * std::cos(a), cy + r * std::sin(a), z(rng));
-      cloud.normals.emplace_back(-std::cos(a), -std::sin(a), 0.0);
-      result.assignment.push_back(-1);
+      loose(Vec3(cx + r * std::cos(a), cy + r * std::sin(a), z(rng)),
+            Vec3(-std::cos(a), -std::sin(a), 0.0));
     }
+  }
+
+  // A point of no surface.
+  void loose(const Vec3& p, const Vec3& normal) {
+    cloud.points.push_back(p);
+    cloud.normals.push_back(normal);
+    result.assignment.push_back(-1);
   }
 
   void finish() {
@@ -97,6 +103,12 @@ void sides(FaceScan& scan, double step, std::mt19937& rng) {
   scan.face(-Vec3::UnitY(), 15.0, anywhere, Vec3(-20, -15, -2), Vec3(20, -15, 2), step, rng);
 }
 
+// The plate's top and bottom faces, both without the holes, sampled at `step`.
+void plate(FaceScan& scan, const std::vector<Hole>& holes, double step, std::mt19937& rng) {
+  scan.face(Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, 2), Vec3(20, 15, 2), step, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, -2), Vec3(20, 15, -2), step, rng);
+}
+
 std::vector<const CylinderSurface*> holesOf(const DetectionResult& result, std::size_t from) {
   std::vector<const CylinderSurface*> out;
   for (std::size_t s = from; s < result.surfaces.size(); ++s) {
@@ -111,8 +123,7 @@ TEST(RimHoles, ThroughHolesSeenOnlyFromTheirRimsBecomeCylindersThroughThePlate) 
   std::mt19937 rng(3);
   const std::vector<Hole> holes{{-12, -7, 2}, {12, -7, 2}, {-12, 7, 2}, {12, 7, 2}};
   FaceScan scan;
-  scan.face(Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-  scan.face(-Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  plate(scan, holes, 0.4, rng);
   sides(scan, 0.4, rng);
   scan.finish();
   const std::size_t before = scan.result.surfaces.size();
@@ -242,15 +253,12 @@ TEST(RimHoles, ASmallBossOnTheFaceIsNoHole) {
   std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), z(2.0, 4.0);
   for (int k = 0; k < 60; ++k) {
     const double a = angle(rng);
-    scan.cloud.points.emplace_back(2.0 * std::cos(a), 2.0 * std::sin(a), z(rng));
-    scan.cloud.normals.emplace_back(std::cos(a), std::sin(a), 0.0);
-    scan.result.assignment.push_back(-1);
+    scan.loose(Vec3(2.0 * std::cos(a), 2.0 * std::sin(a), z(rng)),
+               Vec3(std::cos(a), std::sin(a), 0));
   }
   std::uniform_real_distribution<double> x(-20, 20), y(-15, 15);
   for (int k = 0; k < 6000; ++k) {
-    scan.cloud.points.emplace_back(x(rng), y(rng), -2.0);
-    scan.cloud.normals.push_back(-Vec3::UnitZ());
-    scan.result.assignment.push_back(-1);
+    scan.loose(Vec3(x(rng), y(rng), -2.0), -Vec3::UnitZ());
   }
   scan.finish();
   const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
@@ -269,31 +277,27 @@ TEST(RimHoles, ARodStandingThroughThePlateIsNoHole) {
   const auto scanWith = [&](bool caps) {
     std::mt19937 rng(31);
     FaceScan scan;
-    scan.face(Vec3::UnitZ(), 2.0, outside({rod}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-    scan.face(-Vec3::UnitZ(), 2.0, outside({rod}), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+    plate(scan, {rod}, 0.4, rng);
     sides(scan, 0.4, rng);
-    const auto loose = [&](const Vec3& p, const Vec3& normal) {
-      scan.cloud.points.push_back(p);
-      scan.cloud.normals.push_back(normal);
-      scan.result.assignment.push_back(-1);
-    };
     std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), u(-6.0, 6.0);
     if (caps) {
       for (int k = 0; k < 160; ++k) {
         const double a = angle(rng), z = 2.0 + std::uniform_real_distribution<double>(0, 1)(rng);
-        loose(Vec3(2.0 * std::cos(a), 2.0 * std::sin(a), z), Vec3(std::cos(a), std::sin(a), 0));
-        loose(Vec3(2.0 * std::cos(a), 2.0 * std::sin(a), -z), Vec3(std::cos(a), std::sin(a), 0));
+        scan.loose(Vec3(2.0 * std::cos(a), 2.0 * std::sin(a), z),
+                   Vec3(std::cos(a), std::sin(a), 0));
+        scan.loose(Vec3(2.0 * std::cos(a), 2.0 * std::sin(a), -z),
+                   Vec3(std::cos(a), std::sin(a), 0));
       }
       for (int k = 0; k < 100;) {
         const double x = u(rng) / 3.0, y = u(rng) / 3.0;
         if (std::hypot(x, y) >= 2.0) continue;
-        loose(Vec3(x, y, 3.0), Vec3::UnitZ());
-        loose(Vec3(x, y, -3.0), -Vec3::UnitZ());
+        scan.loose(Vec3(x, y, 3.0), Vec3::UnitZ());
+        scan.loose(Vec3(x, y, -3.0), -Vec3::UnitZ());
         ++k;
       }
     } else {
       // The arm's top, 4 above the plate, 12 wide over the hole.
-      for (int k = 0; k < 400; ++k) loose(Vec3(u(rng), u(rng) / 2.0, 6.0), Vec3::UnitZ());
+      for (int k = 0; k < 400; ++k) scan.loose(Vec3(u(rng), u(rng) / 2.0, 6.0), Vec3::UnitZ());
     }
     scan.finish();
     return scan;
@@ -312,8 +316,7 @@ TEST(RimHoles, AGapThatACurvedSurfaceExplainsIsLeftToIt) {
   std::mt19937 rng(13);
   const Hole hole{0, 0, 2.5};
   FaceScan scan;
-  scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-  scan.face(-Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  plate(scan, {hole}, 0.4, rng);
   Surface wall;
   wall.shape = CylinderSurface{Vec3::Zero(), Vec3::UnitZ(), 2.6};
   wall.convex = false;
@@ -337,8 +340,7 @@ TEST(RimHoles, ACountersinkExplainsItsRimAndASurfaceAlongTheFaceDoesNot) {
   const Hole hole{0, 0, 2.5};
   const auto scanWith = [&](const Surface& extra) {
     FaceScan scan;
-    scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-    scan.face(-Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+    plate(scan, {hole}, 0.4, rng);
     sides(scan, 0.4, rng);
     scan.result.surfaces.push_back(extra);
     scan.finish();
@@ -371,9 +373,7 @@ TEST(RimHoles, TheFacesPointsNoSurfaceHoldsCloseARimBesideAnEdge) {
   const auto scanWith = [&](double lift) {
     std::mt19937 rng(23);
     FaceScan scan;
-    scan.face(Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.25, rng);
-    scan.face(-Vec3::UnitZ(), 2.0, outside({hole}), Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.25,
-              rng);
+    plate(scan, {hole}, 0.25, rng);
     sides(scan, 0.4, rng);
     for (std::size_t s = 0; s < 2; ++s) {
       std::vector<std::uint32_t>& inliers = scan.result.surfaces[s].inliers;

@@ -198,8 +198,9 @@ class BoreOpener {
     bool plug = false;
     for (double t = end + 0.5 * dir * h_;; t += 0.5 * dir * h_) {
       if (closed(b, t)) return 0;
-      if (dir * (t - floorAt) >= 0.0)
+      if (dir * (t - floorAt) >= 0.0) {
         return open(b, std::min(end, floorAt), std::max(end, floorAt));
+      }
       std::size_t total = 0, air = 0;
       const Vec3 centre = b.point + t * b.axis;
       for (double u = -b.interior; u <= b.interior; u += 0.5 * h_) {
