@@ -58,7 +58,7 @@ struct DetectOptions {
   /// point goes to the surface that explains it: the search costs the same
   /// and its thresholds stay put whatever the density (count; 0: always all
   /// points).
-  std::size_t ransacPoints = 100000;
+  std::size_t ransacPoints = 50000;
 };
 
 /// Surfaces found in a scan, with the point-to-surface assignment.

@@ -182,6 +182,27 @@ TEST(Reconstruction, ABigScanGivesTheTreeOfItsSubsample) {
   EXPECT_GE(test::treeIou(whole.tree, sub.tree), 0.998);
 }
 
+// By default the search is on at most about 50 000 points, the size of the
+// benchmark's scans: a scan of that size is searched whole, and a 100 000
+// point scan on its subsample, with the true tree.
+TEST(Reconstruction, TheDefaultSearchTakesAbout50000PointsOfABiggerScan) {
+  const CsgTree truth = readTreeJson(test::dataDir() / "housing_complex" / "tree.json");
+  SampleOptions so;
+  so.seed = 4;
+  so.points = 50000;
+  const Reconstruction atSize = reconstruct(sampleSurface(truth, so).cloud, ReconstructOptions{});
+  ASSERT_TRUE(atSize.ok()) << atSize.message;
+  EXPECT_TRUE(atSize.detection.searched.empty());
+  EXPECT_EQ(atSize.pointsAfterDetection, 50000u);
+  so.points = 100000;
+  const Reconstruction big = reconstruct(sampleSurface(truth, so).cloud, ReconstructOptions{});
+  ASSERT_TRUE(big.ok()) << big.message;
+  EXPECT_EQ(big.pointsAfterDetection, big.detection.searched.size());
+  EXPECT_NEAR(double(big.pointsAfterDetection), 50000.0, 5000.0);
+  EXPECT_EQ(big.tree.primitiveCount(), truth.primitiveCount());
+  EXPECT_GE(test::treeIou(big.tree, truth), 0.999);
+}
+
 TEST(Reconstruction, ReportsEveryStageInOrder) {
   const Scan scan = readScan(test::dataDir() / "plate_holes" / "scan.ply");
   std::vector<std::string> started, finished;
