@@ -423,10 +423,10 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     for (std::size_t i = 0; i < cloud.size(); ++i) {
       const Vec3 d = cloud.points[i] - center;
       const double t = -d.dot(n);
-      if (t > deepest) continue;
+      // Above the face only the points facing its way count.
+      if (t > deepest || (t < -eps && cloud.normals[i].dot(n) < kFacing)) continue;
       const double rho = lateral(d, n).norm();
       if (t < -eps) {
-        if (cloud.normals[i].dot(n) < kFacing) continue;
         if (rho < radius - band) capHeights.push_back(t);
         if (rho > radius + 2.0 * band && rho < 2.0 * radius) aroundHeights.push_back(t);
         continue;
@@ -444,7 +444,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     // height, with no face at that height around it (a face above the hole
     // that reaches past it, as an overhang's would, is no cap).
     if (capHeights.size() >= kMinEvidence) {
-      const double top = median(std::vector<double>(capHeights));
+      const double top = median(capHeights);
       const auto atTop = [&](const std::vector<double>& heights) {
         return std::size_t(std::count_if(heights.begin(), heights.end(),
                                          [&](double t) { return std::abs(t - top) <= eps; }));

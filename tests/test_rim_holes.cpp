@@ -109,6 +109,13 @@ void plate(FaceScan& scan, const std::vector<Hole>& holes, double step, std::mt1
   scan.face(-Vec3::UnitZ(), 2.0, outside(holes), Vec3(-20, -15, -2), Vec3(20, 15, -2), step, rng);
 }
 
+// The plate's faces with the holes, then its sides, 0.4 apart.
+void plateWithSides(FaceScan& scan, const std::vector<Hole>& holes, double step,
+                    std::mt19937& rng) {
+  plate(scan, holes, step, rng);
+  sides(scan, 0.4, rng);
+}
+
 std::vector<const CylinderSurface*> holesOf(const DetectionResult& result, std::size_t from) {
   std::vector<const CylinderSurface*> out;
   for (std::size_t s = from; s < result.surfaces.size(); ++s) {
@@ -123,8 +130,7 @@ TEST(RimHoles, ThroughHolesSeenOnlyFromTheirRimsBecomeCylindersThroughThePlate) 
   std::mt19937 rng(3);
   const std::vector<Hole> holes{{-12, -7, 2}, {12, -7, 2}, {-12, 7, 2}, {12, 7, 2}};
   FaceScan scan;
-  plate(scan, holes, 0.4, rng);
-  sides(scan, 0.4, rng);
+  plateWithSides(scan, holes, 0.4, rng);
   scan.finish();
   const std::size_t before = scan.result.surfaces.size();
   const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
@@ -277,8 +283,7 @@ TEST(RimHoles, ARodStandingThroughThePlateIsNoHole) {
   const auto scanWith = [&](bool caps) {
     std::mt19937 rng(31);
     FaceScan scan;
-    plate(scan, {rod}, 0.4, rng);
-    sides(scan, 0.4, rng);
+    plateWithSides(scan, {rod}, 0.4, rng);
     std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), u(-6.0, 6.0);
     if (caps) {
       for (int k = 0; k < 160; ++k) {
@@ -340,8 +345,7 @@ TEST(RimHoles, ACountersinkExplainsItsRimAndASurfaceAlongTheFaceDoesNot) {
   const Hole hole{0, 0, 2.5};
   const auto scanWith = [&](const Surface& extra) {
     FaceScan scan;
-    plate(scan, {hole}, 0.4, rng);
-    sides(scan, 0.4, rng);
+    plateWithSides(scan, {hole}, 0.4, rng);
     scan.result.surfaces.push_back(extra);
     scan.finish();
     return scan;
@@ -373,8 +377,7 @@ TEST(RimHoles, TheFacesPointsNoSurfaceHoldsCloseARimBesideAnEdge) {
   const auto scanWith = [&](double lift) {
     std::mt19937 rng(23);
     FaceScan scan;
-    plate(scan, {hole}, 0.25, rng);
-    sides(scan, 0.4, rng);
+    plateWithSides(scan, {hole}, 0.25, rng);
     for (std::size_t s = 0; s < 2; ++s) {
       std::vector<std::uint32_t>& inliers = scan.result.surfaces[s].inliers;
       const double side = s == 0 ? 1.0 : -1.0;
