@@ -81,11 +81,8 @@ struct UnseenFaces {
 /// from a lattice 2 `step` apart in each planar region's plane, and each
 /// sample kept gives the four points `step` apart around it that have no
 /// scan point near. Empty when the scan has fewer than 4 points, no normals,
-/// or a flat hull. The same with any number of threads, but not always from
-/// run to run: a hull face of four or more exactly coplanar points is
-/// triangulated by CGAL in an order that follows memory addresses, and the
-/// lattice is sampled per triangle (a point on an edge shared by two of a
-/// face's triangles is taken by both or by neither; docs/method.md).
+/// or a flat hull. Deterministic with any number of threads and from run to
+/// run, however CGAL triangulates a face of coplanar hull points.
 UnseenFaces unseenHullFaces(const PointCloud& scan, double step,
                             const UnseenFaceOptions& options = {});
 

@@ -6,9 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <vector>
 
 #include "primitives/unseen_faces.h"
 
@@ -68,10 +71,48 @@ TEST(UnseenFaces, TheFaceABlockStoodOnIsCovered) {
     EXPECT_NEAR(u.points.points[i].z(), 0.5 * kSpacing, 1e-9);  // the lowest points
     EXPECT_NEAR(u.points.normals[i].z(), -1.0, 1e-9);
   }
+  // Each point once: the bottom's hull facets, triangles of coplanar points,
+  // share edges that lattice points lie on.
+  std::vector<std::array<double, 3>> at;
+  for (const Vec3& p : u.points.points) at.push_back({p.x(), p.y(), p.z()});
+  std::sort(at.begin(), at.end());
+  EXPECT_EQ(std::adjacent_find(at.begin(), at.end()), at.end());
   // All of the bottom but a rim of the clearance (2.5 spacings) about its edges.
   const double covered = 20.0 - 2.0 * 2.5 * kSpacing;
   EXPECT_GT(u.area, 0.9 * covered * covered);
   EXPECT_LT(u.area, 1.05 * 20.0 * 20.0);
+}
+
+// A disc of radius r at height z (points about `kSpacing` apart), normal n.
+void disc(PointCloud& cloud, double r, double z, const Vec3& n) {
+  for (double x = -r; x <= r; x += kSpacing) {
+    for (double y = -r; y <= r; y += kSpacing) {
+      if (x * x + y * y > r * r) continue;
+      cloud.points.push_back(Vec3(x, y, z));
+      cloud.normals.push_back(n);
+    }
+  }
+}
+
+// A fully seen cylinder, radius 15: its hull's side facets, 1.5 degrees apart,
+// chain into one region around the axis, whose mean normal says nothing of
+// them; each facet's lattice points are taken on its own plane.
+TEST(UnseenFaces, AFullySeenCylinderGainsNothing) {
+  PointCloud c;
+  const double r = 15.0;
+  const int around = int(2.0 * std::numbers::pi * r / kSpacing);
+  for (double z = 0.5 * kSpacing; z < 10.0; z += kSpacing) {
+    for (int k = 0; k < around; ++k) {
+      const double a = 2.0 * std::numbers::pi * k / around;
+      const Vec3 radial(std::cos(a), std::sin(a), 0.0);
+      c.points.push_back(r * radial + Vec3(0, 0, z));
+      c.normals.push_back(radial);
+    }
+  }
+  disc(c, r - 0.5 * kSpacing, 0.0, -Vec3::UnitZ());
+  disc(c, r - 0.5 * kSpacing, 10.0, Vec3::UnitZ());
+  const UnseenFaces u = unseenHullFaces(c, 0.25);
+  EXPECT_EQ(u.points.size(), 0u);
 }
 
 TEST(UnseenFaces, AFullySeenBlockGainsNothing) {
