@@ -88,6 +88,7 @@ Json voxelCounts(const Reconstruction& rec, const Construction& c) {
   const ConstructStats& st = c.stats;
   return {{"surfaces", rec.detection.surfaces.size()},
           {"holes_from_rims", rec.holesFromRims},
+          {"windows_from_rims", rec.rimWindows},
           {"bores_from_walls", rec.boresFromWalls},
           {"points_after_detection", rec.pointsAfterDetection},
           {"unseen_face_points", rec.unseenFacePoints},

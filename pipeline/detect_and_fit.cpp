@@ -160,6 +160,10 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
       out.detection.message += "; " + std::to_string(out.rimHoles.holes) + " hole" +
                                (out.rimHoles.holes == 1 ? "" : "s") + " found from their rims";
     }
+    if (out.rimHoles.windows > 0) {
+      out.detection.message += "; " + std::to_string(out.rimHoles.windows) + " window" +
+                               (out.rimHoles.windows == 1 ? "" : "s") + " found from their rims";
+    }
   }
   lap(out.fitSeconds, out.fitCpuSeconds);
   out.regularization = regularizeSurfaces(out.detection);

@@ -250,6 +250,7 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.resolution = found.resolution;
   out.thin = std::move(found.thin);
   out.holesFromRims = found.rimHoles.holes;
+  out.rimWindows = found.rimHoles.windows;
   out.boresFromWalls = found.wallBores.bores;
   out.timeLimitHit = control.pastDeadline();
   if (!fitsInMemory(out, options)) return out;
@@ -352,6 +353,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   fo.detect = options.detect;
   fo.finerGrid = options.finerGrid && options.method != Method::Gp;
   fo.memoryLimit = options.memoryLimit;
+  fo.rimHoleOptions = options.rims;
   SurfacesAndCandidates found =
       detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
         return control.report(fraction, step) && !control.pastDeadline();

@@ -67,6 +67,7 @@ struct ReconstructOptions {
   LabelOptions labels;         ///< voxel labelling
   UnseenFaceOptions unseen;    ///< labels closed over faces never seen (primitives/unseen_faces.h)
   BoreOpeningOptions bores;    ///< labels completed by the bores seen (voxel/seen_bores.h)
+  RimHoleOptions rims;         ///< holes and windows found from their rims (raw scans)
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
   HybridOptions hybrid;        ///< hybrid method: the repair search (its seed is set from `seed`)
   FinishOptions finish;        ///< hybrid method: the parameter fit last (its fitness is set from
@@ -152,6 +153,7 @@ struct Reconstruction {
   int resolution = 0;              ///< the grid's (finer than asked when the part is thin)
   std::vector<ThinFeature> thin;   ///< features thinner than two voxels at the asked resolution
   std::size_t holesFromRims = 0;   ///< hole cylinders found from their rims (raw scans)
+  std::size_t rimWindows = 0;      ///< windows found from their rims (raw scans)
   std::size_t boresFromWalls = 0;  ///< bore and boss cylinders found from their walls (raw scans)
   /// Points the labels, the optimisation and the repair worked on: all of
   /// the scan's, or, for a scan larger than the detection's search

@@ -11,6 +11,7 @@
 
 #include "core/nearest_neighbors.h"
 #include "core/statistics.h"
+#include "primitives/min_area_rectangle.h"
 #include "primitives/surface_fit_internal.h"
 
 namespace csgvox {
@@ -46,6 +47,9 @@ constexpr std::size_t kMinPeaks = 6;
 // side of the face, over the step, is then above this (cos 30 degrees; a
 // hole's wall gives about 0, a 90-degree countersink's cone 0.71).
 constexpr double kTangent = 0.87;
+// Stretches along a window's side, at most, each at least two point spacings
+// long, each of which must hold a point near the side (a window's sectors).
+constexpr int kSideStretches = 6;
 // Fewest points that show a hole's bottom face or its wall.
 constexpr std::size_t kMinEvidence = 4;
 
@@ -57,7 +61,179 @@ struct Rim {
   double radius = 0.0;
   double spacing = 0.0;               // of the face's points it was found among
   std::vector<std::uint32_t> points;  // the plane's inliers around the gap
+  // A rectangular gap (a window) instead of a round one: `center` is the
+  // rectangle's, `along` the unit direction of its longer side (in the
+  // plane), `halfLength` >= `halfWidth` its half sides; `radius` is
+  // `halfWidth`.
+  bool window = false;
+  Vec3 along = Vec3::UnitX();
+  double halfLength = 0.0;
+  double halfWidth = 0.0;
 };
+
+// A face's points in its plane (2D), on a grid of cells about one point
+// spacing wide: the points of each cell, and the distance from each cell's
+// centre to the nearest point (the room among the points).
+struct FaceGrid {
+  Vec2 lo = Vec2::Zero();
+  double cell = 0.0;
+  int w = 0, h = 0;
+  std::vector<std::uint32_t> start, members;  // each cell's points (compressed rows)
+  std::vector<double> empty;                  // per cell
+
+  Vec2 centre(int x, int y) const {
+    return Vec2(lo.x() + (x + 0.5) * cell, lo.y() + (y + 0.5) * cell);
+  }
+  std::size_t cellOf(const Vec2& p) const {
+    const int x = std::clamp(int(std::floor((p.x() - lo.x()) / cell)), 0, w - 1);
+    const int y = std::clamp(int(std::floor((p.y() - lo.y()) / cell)), 0, h - 1);
+    return std::size_t(y) * std::size_t(w) + std::size_t(x);
+  }
+  // Calls f(k) for each point k of the cells that the box [a, b] reaches.
+  template <class F>
+  void forEachNear(const Vec2& a, const Vec2& b, F&& f) const {
+    const std::size_t c0 = cellOf(a), c1 = cellOf(b);
+    for (std::size_t y = c0 / std::size_t(w); y <= c1 / std::size_t(w); ++y) {
+      for (std::size_t x = c0 % std::size_t(w); x <= c1 % std::size_t(w); ++x) {
+        const std::size_t c = y * std::size_t(w) + x;
+        for (std::uint32_t m = start[c]; m < start[c + 1]; ++m) f(members[m]);
+      }
+    }
+  }
+};
+
+// A local maximum of a face's distance map: the centre and radius of an
+// empty circle among its points.
+struct Peak {
+  Vec2 center;
+  double radius;
+};
+
+// A rectangle in a face's plane (2D): a window's outline.
+struct WindowShape {
+  Vec2 center = Vec2::Zero();
+  Vec2 along = Vec2::UnitX();  // unit, along the longer side
+  double halfLength = 0.0;
+  double halfWidth = 0.0;
+
+  // (along, across) coordinates of q about the centre.
+  Vec2 local(const Vec2& q) const {
+    const Vec2 d = q - center;
+    return Vec2(d.dot(along), d.x() * along.y() - d.y() * along.x());
+  }
+  // How far q lies outside the rectangle, in the larger of the two
+  // directions (negative inside).
+  double outside(const Vec2& q) const {
+    const Vec2 l = local(q);
+    return std::max(std::abs(l.x()) - halfLength, std::abs(l.y()) - halfWidth);
+  }
+};
+
+// The rectangle of the gap around `seed` (a maximum of the distance map
+// whose gap is not round), when the face's points follow four straight
+// sides around it: the empty room farther than half the seed's radius from
+// every point (the gap shrunk by that much, its corners kept) gives the
+// rectangle's orientation (its minimum-area rectangle) and the sides' first
+// places; along each side the nearest point of each stretch two spacings
+// long must be there, at one distance (their spread at most `roundness`
+// times the half width plus `roundnessSpacings` spacings, as a round rim's
+// sectors), and the side lies at their median. The room must not reach the
+// grid's border (a notch in the face's edge), and the rectangle may hold no
+// more than kMinEvidence points two spacings in from its sides (the strips
+// along a thin wall's window sides hold points of blended normals).
+bool findWindow(const std::vector<Vec3>& flat, const FaceGrid& grid, const Peak& seed,
+                double spacing, double maxHalf, const RimHoleOptions& options, WindowShape& out) {
+  const double theta = 0.5 * seed.radius;
+  const std::size_t maxCells =
+      std::size_t(std::ceil(4.0 * maxHalf * maxHalf / (grid.cell * grid.cell))) + 1;
+  std::vector<char> seen(grid.empty.size(), 0);
+  std::vector<std::size_t> queue{grid.cellOf(seed.center)};
+  seen[queue.front()] = 1;
+  std::vector<Vec2> room;
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const std::size_t c = queue[q];
+    const int x = int(c % std::size_t(grid.w)), y = int(c / std::size_t(grid.w));
+    if (x == 0 || y == 0 || x + 1 == grid.w || y + 1 == grid.h) return false;
+    if (queue.size() > maxCells) return false;
+    room.push_back(grid.centre(x, y));
+    for (const std::size_t n : {c - 1, c + 1, c - std::size_t(grid.w), c + std::size_t(grid.w)}) {
+      if (!seen[n] && grid.empty[n] >= theta) {
+        seen[n] = 1;
+        queue.push_back(n);
+      }
+    }
+  }
+  if (room.size() < 3) return false;
+  WindowShape shape;
+  shape.center = seed.center;
+  shape.along = minAreaRectangle(room).direction.normalized();
+  if (!shape.along.allFinite()) return false;
+  // The room's extent along and across, about the seed.
+  Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  Vec2 boxLo = lo, boxHi = hi;
+  for (const Vec2& c : room) {
+    const Vec2 l = shape.local(c);
+    lo = lo.cwiseMin(l);
+    hi = hi.cwiseMax(l);
+    boxLo = boxLo.cwiseMin(c);
+    boxHi = boxHi.cwiseMax(c);
+  }
+  const double reach = theta + 3.0 * spacing + grid.cell;
+  std::vector<Vec2> near;  // the points around the room, in (along, across)
+  grid.forEachNear(boxLo - Vec2::Constant(reach), boxHi + Vec2::Constant(reach),
+                   [&](std::uint32_t k) { near.push_back(shape.local(flat[k].head<2>())); });
+  // Each side: its axis (0 along, 1 across) and its sign.
+  const double halfWidth0 = 0.5 * (hi.y() - lo.y()) + theta;
+  std::array<double, 4> place{};  // of each side, signed along its axis
+  for (int side = 0; side < 4; ++side) {
+    const int e = side / 2, t = 1 - e;
+    const double sign = side % 2 == 0 ? 1.0 : -1.0;
+    const double edge = sign > 0.0 ? hi[e] : -lo[e];
+    const double t0 = lo[t], t1 = hi[t];
+    const int stretches = std::clamp(int((t1 - t0) / (2.0 * spacing)), 1, kSideStretches);
+    std::vector<double> nearest(std::size_t(stretches), std::numeric_limits<double>::infinity());
+    for (const Vec2& l : near) {
+      const double d = sign * l[e];
+      if (d <= edge || d > edge + reach || l[t] < t0 || l[t] > t1) continue;
+      const int k = std::min(stretches - 1, int((l[t] - t0) / (t1 - t0 + 1e-300) * stretches));
+      nearest[std::size_t(k)] = std::min(nearest[std::size_t(k)], d);
+    }
+    std::vector<double> found;
+    for (double d : nearest) {
+      if (std::isfinite(d)) found.push_back(d);
+    }
+    if (found.empty() || found.size() + 1 < nearest.size()) return false;
+    std::sort(found.begin(), found.end());
+    const std::size_t n = found.size();
+    const double spread = n >= 4 ? found[n - 2] - found[1] : found.back() - found.front();
+    if (spread > options.roundness * halfWidth0 + options.roundnessSpacings * spacing) {
+      return false;
+    }
+    place[std::size_t(side)] = median(std::move(found));
+  }
+  // The rectangle between the sides; the longer side first.
+  Vec2 mid(0.5 * (place[0] - place[1]), 0.5 * (place[2] - place[3]));
+  Vec2 half(0.5 * (place[0] + place[1]), 0.5 * (place[2] + place[3]));
+  shape.center += mid.x() * shape.along + mid.y() * Vec2(shape.along.y(), -shape.along.x());
+  if (half.x() < half.y()) {
+    shape.along = Vec2(shape.along.y(), -shape.along.x());
+    std::swap(half.x(), half.y());
+  }
+  shape.halfLength = half.x();
+  shape.halfWidth = half.y();
+  if (!(shape.halfWidth >= options.minRadiusSpacings * spacing) || shape.halfLength > maxHalf) {
+    return false;
+  }
+  // Nothing inside it (a spacing in from its sides).
+  std::size_t inside = 0;
+  grid.forEachNear(boxLo - Vec2::Constant(reach), boxHi + Vec2::Constant(reach),
+                   [&](std::uint32_t k) {
+                     inside += shape.outside(flat[k].head<2>()) < -2.0 * spacing ? 1 : 0;
+                   });
+  if (inside > kMinEvidence) return false;
+  out = shape;
+  return true;
+}
 
 // The round gaps among the inliers of the coplanar plane surfaces `group`
 // (detection may split one face among several; the first holds the most
@@ -117,41 +293,36 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
   // values, moves borderline rims either way.)
   const double spacing = medianNearestDistance(flat, nn);
   if (!(spacing > 0.0)) return;
-  double cell = spacing;
+  FaceGrid grid;
+  grid.lo = lo;
+  grid.cell = spacing;
   const Vec2 size = hi - lo;
-  if ((size.x() / cell + 1.0) * (size.y() / cell + 1.0) > kMaxCells) {
-    cell = std::sqrt(size.x() * size.y() / kMaxCells) + 1e-12 * (size.x() + size.y());
+  if ((size.x() / grid.cell + 1.0) * (size.y() / grid.cell + 1.0) > kMaxCells) {
+    grid.cell = std::sqrt(size.x() * size.y() / kMaxCells) + 1e-12 * (size.x() + size.y());
   }
-  const int w = int(size.x() / cell) + 1, h = int(size.y() / cell) + 1;
-  const auto centre = [&](int x, int y) {
-    return Vec2(lo.x() + (x + 0.5) * cell, lo.y() + (y + 0.5) * cell);
-  };
-  const auto cellOf = [&](const Vec2& p) {
-    const int x = std::clamp(int(std::floor((p.x() - lo.x()) / cell)), 0, w - 1);
-    const int y = std::clamp(int(std::floor((p.y() - lo.y()) / cell)), 0, h - 1);
-    return std::size_t(y) * std::size_t(w) + std::size_t(x);
-  };
-  // The points of each cell (compressed rows), and the distance from each
-  // cell's centre to the nearest point.
+  grid.w = int(size.x() / grid.cell) + 1;
+  grid.h = int(size.y() / grid.cell) + 1;
+  const int w = grid.w, h = grid.h;
   const std::size_t cells = std::size_t(w) * std::size_t(h);
-  std::vector<std::uint32_t> start(cells + 1, 0), members(flat.size());
-  for (const Vec3& p : flat) ++start[cellOf(p.head<2>()) + 1];
-  for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  grid.start.assign(cells + 1, 0);
+  grid.members.resize(flat.size());
+  for (const Vec3& p : flat) ++grid.start[grid.cellOf(p.head<2>()) + 1];
+  for (std::size_t c = 0; c < cells; ++c) grid.start[c + 1] += grid.start[c];
   {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    std::vector<std::uint32_t> fill(grid.start.begin(), grid.start.end() - 1);
     for (std::size_t k = 0; k < flat.size(); ++k) {
-      members[fill[cellOf(flat[k].head<2>())]++] = std::uint32_t(k);
+      grid.members[fill[grid.cellOf(flat[k].head<2>())]++] = std::uint32_t(k);
     }
   }
-  std::vector<double> empty(cells);
+  grid.empty.resize(cells);
   {
     std::vector<std::uint32_t> near;
     std::vector<double> d2;
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
-        const Vec2 c = centre(x, y);
+        const Vec2 c = grid.centre(x, y);
         nn.kNearest(Vec3(c.x(), c.y(), 0.0), 1, near, &d2);
-        empty[std::size_t(y) * std::size_t(w) + std::size_t(x)] = std::sqrt(d2[0]);
+        grid.empty[std::size_t(y) * std::size_t(w) + std::size_t(x)] = std::sqrt(d2[0]);
       }
     }
   }
@@ -159,41 +330,96 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
   const double maxRadius = options.maxRadius * result.diagonal;
   // Centres: local maxima of the distance (the sector test below tells a
   // hole from the room beside a face's edge).
-  struct Candidate {
-    Vec2 center;
-    double radius;
-  };
-  std::vector<Candidate> candidates;
-  std::vector<Candidate> peaks;  // every local maximum of the distance
+  std::vector<Peak> candidates;
+  std::vector<Peak> peaks;  // every local maximum of the distance
   for (int y = 1; y + 1 < h; ++y) {
     for (int x = 1; x + 1 < w; ++x) {
       const std::size_t c = std::size_t(y) * std::size_t(w) + std::size_t(x);
-      const double r = empty[c];
+      const double r = grid.empty[c];
       if (r > maxRadius) continue;
       bool peak = true;
       for (int dy = -1; dy <= 1 && peak; ++dy) {
         for (int dx = -1; dx <= 1 && peak; ++dx) {
           const std::size_t n = std::size_t(y + dy) * std::size_t(w) + std::size_t(x + dx);
           // Ties go to the first cell, so a plateau gives one peak.
-          if (n != c && (empty[n] > r || (empty[n] == r && n < c))) peak = false;
+          if (n != c && (grid.empty[n] > r || (grid.empty[n] == r && n < c))) peak = false;
         }
       }
       if (!peak) continue;
-      peaks.push_back({centre(x, y), r});
-      if (r >= minRadius) candidates.push_back({centre(x, y), r});
+      peaks.push_back({grid.centre(x, y), r});
+      if (r >= minRadius) candidates.push_back({grid.centre(x, y), r});
     }
   }
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+  std::sort(candidates.begin(), candidates.end(), [](const Peak& a, const Peak& b) {
     return std::tuple(-a.radius, a.center.x(), a.center.y()) <
            std::tuple(-b.radius, b.center.x(), b.center.y());
   });
-  std::vector<Candidate> taken;
+  std::vector<Peak> taken;
+  std::vector<WindowShape> windows;
   std::vector<std::uint32_t> near;
   std::vector<double> d2;
-  for (const Candidate& cand : candidates) {
-    if (std::any_of(taken.begin(), taken.end(), [&](const Candidate& t) {
-          return (t.center - cand.center).norm() < t.radius + cand.radius;
-        })) {
+  // The gap's rim: the points of `pool` (indices into flat) within two
+  // spacings outside its outline (`beyond(q)`: how far q lies outside it).
+  // The gap must be wide for their own spacing (a sparse patch has gaps of a
+  // spacing or two) and for the sampling around it: a scanner's rows leave a
+  // regular pattern of empty circles one or two spacings wide (rows further
+  // apart than the points along a row, which the spacing measures); a hole
+  // is much wider than the typical empty circle beside it.
+  const auto wideRim = [&](const std::vector<std::size_t>& pool, const auto& beyond, double radius,
+                           std::vector<std::uint32_t>& ring) {
+    std::vector<double> gaps;
+    for (std::size_t k : pool) {
+      if (beyond(flat[k].head<2>()) > 2.0 * spacing) continue;
+      ring.push_back(inliers[k]);
+      nn.kNearest(flat[k], 2, near, &d2);
+      if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
+    }
+    if (gaps.empty() || radius < options.minRadiusSpacings * median(std::move(gaps))) return false;
+    std::vector<double> around;
+    for (const Peak& p : peaks) {
+      const double d = beyond(p.center);
+      if (d > spacing && d < (kPeakWindow - 1.0) * radius) around.push_back(p.radius);
+    }
+    return !(around.size() >= kMinPeaks &&
+             radius < options.minPeakRatio * median(std::move(around)));
+  };
+  // A gap that is not round may be a rectangle (a window or a slot).
+  const auto tryWindow = [&](const Peak& cand) {
+    WindowShape shape;
+    if (!options.windows || !findWindow(flat, grid, cand, spacing, maxRadius, options, shape)) {
+      return;
+    }
+    const Vec2 reachOut = Vec2::Constant(shape.halfLength + 3.0 * spacing);
+    std::vector<std::size_t> pool;
+    grid.forEachNear(shape.center - reachOut, shape.center + reachOut,
+                     [&](std::uint32_t k) { pool.push_back(k); });
+    std::vector<std::uint32_t> ring;
+    if (!wideRim(
+            pool, [&](const Vec2& q) { return shape.outside(q); }, shape.halfWidth, ring)) {
+      return;
+    }
+    windows.push_back(shape);
+    ++stats.windowGaps;
+    Rim r;
+    r.plane = s;
+    r.normal = plane->normal;
+    r.center = plane->offset * plane->normal + shape.center.x() * u + shape.center.y() * v;
+    r.radius = shape.halfWidth;
+    r.spacing = spacing;
+    r.points = std::move(ring);
+    r.window = true;
+    r.along = (shape.along.x() * u + shape.along.y() * v).normalized();
+    r.halfLength = shape.halfLength;
+    r.halfWidth = shape.halfWidth;
+    rims.push_back(std::move(r));
+  };
+  for (const Peak& cand : candidates) {
+    if (std::any_of(taken.begin(), taken.end(),
+                    [&](const Peak& t) {
+                      return (t.center - cand.center).norm() < t.radius + cand.radius;
+                    }) ||
+        std::any_of(windows.begin(), windows.end(),
+                    [&](const WindowShape& t) { return t.outside(cand.center) < cand.radius; })) {
       continue;
     }
     // The points around the circle (from the cells it reaches), then its
@@ -201,18 +427,12 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     const double reach = cand.radius * (1.0 + options.roundness) + 2.0 * spacing;
     std::vector<std::size_t> band;
     std::vector<std::uint32_t> bandPoints;  // scan indices
-    const std::size_t c0 = cellOf(cand.center - Vec2::Constant(reach));
-    const std::size_t c1 = cellOf(cand.center + Vec2::Constant(reach));
-    for (std::size_t y = c0 / std::size_t(w); y <= c1 / std::size_t(w); ++y) {
-      for (std::size_t x = c0 % std::size_t(w); x <= c1 % std::size_t(w); ++x) {
-        const std::size_t c = y * std::size_t(w) + x;
-        for (std::uint32_t m = start[c]; m < start[c + 1]; ++m) {
-          if ((flat[members[m]].head<2>() - cand.center).norm() > reach) continue;
-          band.push_back(members[m]);
-          bandPoints.push_back(inliers[members[m]]);
-        }
-      }
-    }
+    grid.forEachNear(cand.center - Vec2::Constant(reach), cand.center + Vec2::Constant(reach),
+                     [&](std::uint32_t k) {
+                       if ((flat[k].head<2>() - cand.center).norm() > reach) return;
+                       band.push_back(k);
+                       bandPoints.push_back(inliers[k]);
+                     });
     const Vec3 origin = plane->offset * plane->normal + cand.center.x() * u + cand.center.y() * v;
     Vec2 center = cand.center;
     Vec3 fitted;
@@ -231,6 +451,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
       nearest[std::size_t(sector)] = std::min(nearest[std::size_t(sector)], d.norm());
     }
     if (!std::all_of(nearest.begin(), nearest.end(), [](double r) { return std::isfinite(r); })) {
+      tryWindow(cand);
       continue;
     }
     std::array<double, kSectors> sorted = nearest;
@@ -241,29 +462,12 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     if (radius > maxRadius ||
         sorted[kSectors - 2] - sorted[1] >
             options.roundness * radius + options.roundnessSpacings * spacing) {
+      tryWindow(cand);
       continue;
     }
-    // The rim: the points of the innermost ring; the gap must be wide for
-    // their own spacing (a sparse patch has gaps of a spacing or two).
     std::vector<std::uint32_t> ring;
-    std::vector<double> gaps;
-    for (std::size_t k : band) {
-      if ((flat[k].head<2>() - center).norm() > radius + 2.0 * spacing) continue;
-      ring.push_back(inliers[k]);
-      nn.kNearest(flat[k], 2, near, &d2);
-      if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
-    }
-    if (gaps.empty() || radius < options.minRadiusSpacings * median(std::move(gaps))) continue;
-    // The gaps of the sampling around it: a scanner's rows leave a regular
-    // pattern of empty circles one or two spacings wide (rows further apart
-    // than the points along a row, which the spacing measures); a hole is
-    // much wider than the typical empty circle beside it.
-    std::vector<double> around;
-    for (const Candidate& p : peaks) {
-      const double d = (p.center - center).norm();
-      if (d > radius + spacing && d < kPeakWindow * radius) around.push_back(p.radius);
-    }
-    if (around.size() >= kMinPeaks && radius < options.minPeakRatio * median(std::move(around))) {
+    if (!wideRim(
+            band, [&](const Vec2& q) { return (q - center).norm() - radius; }, radius, ring)) {
       continue;
     }
     taken.push_back({center, radius});
@@ -312,6 +516,161 @@ bool explained(const DetectionResult& result, const Rim& rim) {
 // Component of d across the unit axis n.
 Vec3 lateral(const Vec3& d, const Vec3& n) { return d - d.dot(n) * n; }
 
+// The windows: a rectangular gap in a face with the same gap in the
+// opposite face (a window or a slot through a wall) becomes the planes of
+// its four sides, each holding the two rims' points along it and the side's
+// own points that no surface holds (a scanner sees a thin wall's window
+// sides at a grazing angle, if at all). A side where a plane was found
+// already keeps it; a window whose four sides were all found is left alone.
+// As for a hole, points inside the window between the faces veto it, and so
+// does the top of a bar standing through the wall.
+void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vector<char>& used,
+                DetectionResult& result, RimHoleStats& stats) {
+  const double eps = result.epsilon;
+  const std::size_t found = result.surfaces.size();
+  for (std::size_t a = 0; a < rims.size(); ++a) {
+    if (used[a] || !rims[a].window) continue;
+    const Rim& ra = rims[a];
+    const Vec3 n = ra.normal;
+    std::size_t partner = rims.size();
+    double depth = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < rims.size(); ++b) {
+      const Rim& rb = rims[b];
+      if (used[b] || b == a || !rb.window || rb.normal.dot(n) > -kParallel) continue;
+      const Vec3 d = rb.center - ra.center;
+      const double along = -d.dot(n);
+      if (along <= eps || std::abs(rb.along.dot(ra.along)) < kParallel) continue;
+      if (lateral(d, n).norm() > std::max(0.25 * std::min(ra.halfWidth, rb.halfWidth), 2.0 * eps)) {
+        continue;
+      }
+      if (std::max(ra.halfLength, rb.halfLength) > 1.4 * std::min(ra.halfLength, rb.halfLength) ||
+          std::max(ra.halfWidth, rb.halfWidth) > 1.4 * std::min(ra.halfWidth, rb.halfWidth)) {
+        continue;
+      }
+      if (along < depth) depth = along, partner = b;
+    }
+    if (partner == rims.size()) continue;
+    const Rim& rb = rims[partner];
+    // The window: the overlap of the two gaps (a sparse face shows a gap
+    // larger than the window, never smaller), on the first face's plane.
+    const Vec3 e0 = ra.along, e1 = n.cross(e0);
+    Vec2 lo = Vec2::Constant(-std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Rim* rim : {&ra, &rb}) {
+      const Vec3 c = lateral(rim->center - ra.center, n);
+      const double l0 = rim->halfLength, l1 = rim->halfWidth;
+      lo = lo.cwiseMax(Vec2(c.dot(e0) - l0, c.dot(e1) - l1));
+      hi = hi.cwiseMin(Vec2(c.dot(e0) + l0, c.dot(e1) + l1));
+    }
+    const Vec3 center = ra.center + 0.5 * (lo.x() + hi.x()) * e0 + 0.5 * (lo.y() + hi.y()) * e1;
+    const std::array<double, 2> half{0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y())};
+    const double band = std::max(eps, std::max(ra.spacing, rb.spacing));
+    // Side k: axis k / 2 (0 along, 1 across), sign + for even k; its
+    // outward normal points into the window.
+    const auto sideAxis = [&](int k) { return (k / 2 == 0 ? e0 : e1) * (k % 2 == 0 ? 1.0 : -1.0); };
+    std::array<std::vector<std::uint32_t>, 4> sidePoints;
+    for (const Rim* rim : {&ra, &rb}) {
+      for (std::uint32_t i : rim->points) {
+        const Vec3 d = cloud.points[i] - center;
+        const double x = d.dot(e0), y = d.dot(e1);
+        const std::array<double, 4> beyond{x - half[0], -x - half[0], y - half[1], -y - half[1]};
+        const int k = int(std::max_element(beyond.begin(), beyond.end()) - beyond.begin());
+        sidePoints[std::size_t(k)].push_back(i);
+      }
+    }
+    // How far a point lies outside the window, across the axis.
+    const auto outside = [&](const Vec3& d) {
+      return std::max(std::abs(d.dot(e0)) - half[0], std::abs(d.dot(e1)) - half[1]);
+    };
+    std::size_t inside = 0;
+    std::array<std::vector<std::uint32_t>, 4> wall;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const Vec3 d = cloud.points[i] - center;
+      const double t = -d.dot(n);
+      if (t < -eps || t > depth + eps) continue;
+      const Vec2 l(d.dot(e0), d.dot(e1));
+      const double out = outside(d);
+      if (out < -band && t > eps && t < depth - eps) ++inside;
+      if (result.assignment[i] >= 0 || std::abs(out) > band) continue;
+      if (std::abs(cloud.normals[i].dot(n)) > kAcrossAxis) continue;
+      // The side it lies on: the one it is nearest to, across which its
+      // normal points.
+      for (int k = 0; k < 4; ++k) {
+        const double off = (k / 2 == 0 ? l.x() : l.y()) * (k % 2 == 0 ? 1.0 : -1.0);
+        if (std::abs(off - half[std::size_t(k / 2)]) <= band &&
+            cloud.normals[i].dot(sideAxis(k)) < -kAcrossAxis) {
+          wall[std::size_t(k)].push_back(std::uint32_t(i));
+          break;
+        }
+      }
+    }
+    std::size_t wallCount = 0;
+    for (const auto& w : wall) wallCount += w.size();
+    if (inside > kMinEvidence + wallCount / 10) continue;
+    // A bar standing through the wall: its top shows above one of the two
+    // faces, inside the window, at one height with no face at that height
+    // around it.
+    const auto capped = [&](const Vec3& faceCenter, const Vec3& faceNormal) {
+      std::vector<double> capHeights, aroundHeights;
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Vec3 d = cloud.points[i] - faceCenter;
+        const double t = -d.dot(faceNormal);
+        if (t >= -eps || cloud.normals[i].dot(faceNormal) < kFacing) continue;
+        const double out = outside(d);
+        if (out < -band) capHeights.push_back(t);
+        if (out > 2.0 * band && out < half[1]) aroundHeights.push_back(t);
+      }
+      if (capHeights.size() < kMinEvidence) return false;
+      const double top = median(capHeights);
+      const auto atTop = [&](const std::vector<double>& heights) {
+        return std::size_t(std::count_if(heights.begin(), heights.end(),
+                                         [&](double t) { return std::abs(t - top) <= eps; }));
+      };
+      const std::size_t cap = atTop(capHeights);
+      return cap >= kMinEvidence && 4 * atTop(aroundHeights) < cap;
+    };
+    if (capped(center, n) || capped(center - depth * n, rb.normal)) continue;
+    used[a] = used[partner] = 1;
+    // The sides' planes; a side whose plane was found already keeps it.
+    std::array<bool, 4> missing{};
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 normal = -sideAxis(k);
+      const double offset = normal.dot(center - half[std::size_t(k / 2)] * normal);
+      missing[std::size_t(k)] =
+          std::none_of(result.surfaces.begin(), result.surfaces.begin() + std::ptrdiff_t(found),
+                       [&](const Surface& s) {
+                         const auto* p = s.as<PlaneSurface>();
+                         return p != nullptr && p->normal.dot(normal) > kParallel &&
+                                std::abs(p->offset - offset) <= 2.0 * eps + band;
+                       });
+    }
+    if (std::none_of(missing.begin(), missing.end(), [](bool m) { return m; })) {
+      ++stats.explained;
+      continue;
+    }
+    for (int k = 0; k < 4; ++k) {
+      if (!missing[std::size_t(k)]) continue;
+      const Vec3 normal = -sideAxis(k);
+      Surface side;
+      side.shape = PlaneSurface{normal, normal.dot(center - half[std::size_t(k / 2)] * normal)};
+      side.rms = std::max(result.noise, 1e-9 * result.diagonal);
+      std::vector<std::uint32_t> points = sidePoints[std::size_t(k)];
+      points.insert(points.end(), wall[std::size_t(k)].begin(), wall[std::size_t(k)].end());
+      std::sort(points.begin(), points.end());
+      points.erase(std::unique(points.begin(), points.end()), points.end());
+      const int index = int(result.surfaces.size());
+      for (std::uint32_t i : wall[std::size_t(k)]) result.assignment[i] = index;
+      Vec3 sum = Vec3::Zero();
+      for (std::uint32_t i : points) sum += cloud.points[i];
+      if (result.centroids.size() == result.surfaces.size()) {
+        result.centroids.push_back(sum / double(std::max<std::size_t>(1, points.size())));
+      }
+      side.inliers = std::move(points);
+      result.surfaces.push_back(std::move(side));
+    }
+    ++stats.windows;
+  }
+}
+
 }  // namespace
 
 RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
@@ -343,7 +702,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
   if (rims.empty()) return stats;
   std::vector<char> used(rims.size(), 0);
   for (std::size_t a = 0; a < rims.size(); ++a) {
-    if (explained(result, rims[a])) {
+    if (!rims[a].window && explained(result, rims[a])) {
       used[a] = 1;
       ++stats.explained;
     }
@@ -351,7 +710,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
   const double eps = result.epsilon;
   const Aabb bounds = cloud.bounds();
   for (std::size_t a = 0; a < rims.size(); ++a) {
-    if (used[a]) continue;
+    if (used[a] || rims[a].window) continue;
     const Rim& ra = rims[a];
     const Vec3 n = ra.normal;
     // How deep the part reaches behind the face, along -n.
@@ -370,7 +729,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     std::size_t partner = rims.size();
     double partnerDepth = std::numeric_limits<double>::infinity();
     for (std::size_t b = 0; b < rims.size(); ++b) {
-      if (used[b] || b == a || rims[b].normal.dot(n) > -kParallel) continue;
+      if (used[b] || b == a || rims[b].window || rims[b].normal.dot(n) > -kParallel) continue;
       const Rim& rb = rims[b];
       const Vec3 d = rb.center - ra.center;
       const double along = -d.dot(n);
@@ -472,6 +831,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     result.surfaces.push_back(std::move(hole));
     ++stats.holes;
   }
+  addWindows(cloud, rims, used, result, stats);
   return stats;
 }
 

@@ -5,7 +5,10 @@
 /// such gap becomes a hole cylinder, its axis along the face's normal:
 /// through the part when the opposite face shows the same gap, down to the
 /// face seen at the bottom of the hole (a counterbore's step, a blind hole's
-/// floor), or as deep as the wall's own points go.
+/// floor), or as deep as the wall's own points go. A rectangular gap that the
+/// opposite face shows too (a window or a slot through a thin wall, whose
+/// sides the scanner sees at a grazing angle) becomes the planes of its four
+/// sides, from which the hypotheses build the box that cuts it.
 
 #include <cstddef>
 
@@ -38,13 +41,18 @@ struct RimHoleOptions {
   double minPeakRatio = 2.5;
   /// Fewest inliers of a plane searched for gaps (count).
   std::size_t minPlaneInliers = 100;
+  /// Also look for rectangular gaps through a wall (windows and slots),
+  /// added as the planes of their sides.
+  bool windows = true;
 };
 
 /// What addRimHoles found.
 struct RimHoleStats {
-  std::size_t gaps = 0;       ///< round gaps found in the planes
-  std::size_t explained = 0;  ///< of those, rims that a curved surface found already explains
-  std::size_t holes = 0;      ///< hole cylinders added
+  std::size_t gaps = 0;        ///< round gaps found in the planes
+  std::size_t explained = 0;   ///< of those, rims that a curved surface found already explains
+  std::size_t holes = 0;       ///< hole cylinders added
+  std::size_t windowGaps = 0;  ///< rectangular gaps found in the planes
+  std::size_t windows = 0;     ///< windows through a wall added (as the planes of their sides)
 };
 
 /// Adds a hole cylinder (convex false) to `result` for each round gap in a
@@ -53,7 +61,11 @@ struct RimHoleStats {
 /// bottom, or the wall's own points). The new surface's inliers are the rim
 /// points of the gap (still assigned to their plane: they give the hole's
 /// position and ends), the bottom face's points inside it and the wall points
-/// no surface held (those are assigned to it). `result` must be the output of
+/// no surface held (those are assigned to it). With `options.windows`, adds
+/// the planes of the sides of each rectangular gap matched by the same gap in
+/// the opposite face (sides whose plane `result` holds already are not added
+/// again); each holds the rims' points along its side and the side's own
+/// points no surface held (assigned to it). `result` must be the output of
 /// fitSurfaces (its centroids are kept up to date).
 RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
                          const RimHoleOptions& options = {});

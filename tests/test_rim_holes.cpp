@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <numbers>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "io/scan_reader.h"
@@ -224,7 +226,8 @@ TEST(RimHoles, NothingIsInventedWhereTheScanShowsNoDepthOrTheGapIsNotRound) {
   std::mt19937 rng(11);
   // A round gap in the top face only, with no wall points, no floor and no
   // matching gap below (the bottom face has none): no evidence of a hole.
-  // A slot (8 x 4) through both faces is not round.
+  // A slot (8 x 4) through both faces is not round: no hole, but a window
+  // (WindowsThroughAWall). Without windows it adds nothing either.
   const Hole hole{-8, 0, 2};
   const auto square = [](const Vec3& p) {
     return std::abs(p.x() - 8.0) > 4.0 || std::abs(p.y()) > 2.0;
@@ -236,9 +239,156 @@ TEST(RimHoles, NothingIsInventedWhereTheScanShowsNoDepthOrTheGapIsNotRound) {
   sides(scan, 0.4, rng);
   scan.finish();
   const std::size_t before = scan.result.surfaces.size();
-  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  RimHoleOptions noWindows;
+  noWindows.windows = false;
+  DetectionResult result = scan.result;
+  const RimHoleStats stats = addRimHoles(scan.cloud, result, noWindows);
   EXPECT_EQ(stats.gaps, 1u);  // the round one
   EXPECT_EQ(stats.holes, 0u);
+  EXPECT_EQ(stats.windowGaps, 0u);
+  EXPECT_EQ(result.surfaces.size(), before);
+  const RimHoleStats withWindows = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(withWindows.gaps, 1u);
+  EXPECT_EQ(withWindows.holes, 0u);
+  EXPECT_EQ(withWindows.windowGaps, 2u);  // the slot, in both faces
+  EXPECT_EQ(withWindows.windows, 1u);
+  EXPECT_EQ(scan.result.surfaces.size(), before + 4);
+}
+
+// The planes added from `from` on.
+std::vector<const PlaneSurface*> planesOf(const DetectionResult& result, std::size_t from) {
+  std::vector<const PlaneSurface*> out;
+  for (std::size_t s = from; s < result.surfaces.size(); ++s) {
+    if (const auto* p = result.surfaces[s].as<PlaneSurface>()) out.push_back(p);
+  }
+  return out;
+}
+
+// Outside the rectangle of centre (cx, cy), half sides (a, b), turned by
+// `turn` radians about z (grown by `grow`).
+std::function<bool(const Vec3&)> outsideRectangle(double cx, double cy, double a, double b,
+                                                  double turn, double grow = 0.0) {
+  return [=](const Vec3& p) {
+    const double dx = p.x() - cx, dy = p.y() - cy;
+    const double u = std::cos(turn) * dx + std::sin(turn) * dy;
+    const double v = -std::sin(turn) * dx + std::cos(turn) * dy;
+    return std::abs(u) > a + grow || std::abs(v) > b + grow;
+  };
+}
+
+TEST(RimHoles, WindowsThroughAWallBecomeThePlanesOfTheirSides) {
+  // A window 12 x 5 turned by 30 degrees through the plate, its sides not
+  // seen: both faces show the same rectangular gap. Its four sides become
+  // planes across the plate, each at its side of the window (within a
+  // spacing), facing into it, with the rims' points along it.
+  std::mt19937 rng(5);
+  const double turn = std::numbers::pi / 6.0;
+  const auto keep = outsideRectangle(2.0, 1.0, 6.0, 2.5, turn);
+  FaceScan scan;
+  scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  sides(scan, 0.4, rng);
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(stats.gaps, 0u);
+  EXPECT_EQ(stats.windowGaps, 2u);
+  ASSERT_EQ(stats.windows, 1u);
+  const auto planes = planesOf(scan.result, before);
+  ASSERT_EQ(planes.size(), 4u);
+  const Vec3 c(2.0, 1.0, 0.0), along(std::cos(turn), std::sin(turn), 0.0);
+  const Vec3 across(-std::sin(turn), std::cos(turn), 0.0);
+  int matched = 0;
+  for (const PlaneSurface* p : planes) {
+    EXPECT_LT(std::abs(p->normal.z()), 1e-9);
+    for (const auto& [dir, half] :
+         {std::pair<Vec3, double>{along, 6.0}, {-along, 6.0}, {across, 2.5}, {-across, 2.5}}) {
+      // The side at +half along dir faces -dir (into the window).
+      if (p->normal.dot(-dir) < 0.999) continue;
+      EXPECT_NEAR(p->offset, (-dir).dot(c + half * dir), 0.4);
+      ++matched;
+    }
+  }
+  EXPECT_EQ(matched, 4);
+  for (std::size_t s = before; s < scan.result.surfaces.size(); ++s) {
+    EXPECT_GE(scan.result.surfaces[s].inliers.size(), 10u);
+  }
+}
+
+TEST(RimHoles, ARectangularGapInOneFaceOnlyOrAWindowFoundAlreadyAddsNothing) {
+  std::mt19937 rng(9);
+  // The top face's gap only (the bottom face whole): a pocket's or a
+  // shadow's, not a window: nothing.
+  {
+    FaceScan scan;
+    scan.face(Vec3::UnitZ(), 2.0, outsideRectangle(0.0, 0.0, 7.0, 3.0, 0.0), Vec3(-20, -15, 2),
+              Vec3(20, 15, 2), 0.4, rng);
+    scan.face(-Vec3::UnitZ(), 2.0, anywhere, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+    sides(scan, 0.4, rng);
+    scan.finish();
+    const std::size_t before = scan.result.surfaces.size();
+    const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+    EXPECT_EQ(stats.windowGaps, 1u);
+    EXPECT_EQ(stats.windows, 0u);
+    EXPECT_EQ(scan.result.surfaces.size(), before);
+  }
+  // A window through both faces whose four sides detection found: left alone.
+  {
+    const auto keep = outsideRectangle(0.0, 0.0, 7.0, 3.0, 0.0);
+    FaceScan scan;
+    scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+    scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+    sides(scan, 0.4, rng);
+    scan.face(-Vec3::UnitX(), -7.0, anywhere, Vec3(7, -3, -2), Vec3(7, 3, 2), 0.4, rng);
+    scan.face(Vec3::UnitX(), -7.0, anywhere, Vec3(-7, -3, -2), Vec3(-7, 3, 2), 0.4, rng);
+    scan.face(-Vec3::UnitY(), -3.0, anywhere, Vec3(-7, 3, -2), Vec3(7, 3, 2), 0.4, rng);
+    scan.face(Vec3::UnitY(), -3.0, anywhere, Vec3(-7, -3, -2), Vec3(7, -3, 2), 0.4, rng);
+    scan.finish();
+    const std::size_t before = scan.result.surfaces.size();
+    const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+    EXPECT_EQ(stats.windowGaps, 2u);
+    EXPECT_EQ(stats.windows, 0u);
+    EXPECT_EQ(stats.explained, 1u);
+    EXPECT_EQ(scan.result.surfaces.size(), before);
+  }
+  // A gap shaped as a cross through both faces is neither round nor a
+  // rectangle: nothing.
+  {
+    const auto keep = [](const Vec3& p) {
+      return outsideRectangle(0.0, 0.0, 7.0, 2.0, 0.0)(p) &&
+             outsideRectangle(0.0, 0.0, 2.0, 7.0, 0.0)(p);
+    };
+    FaceScan scan;
+    scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+    scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+    sides(scan, 0.4, rng);
+    scan.finish();
+    const std::size_t before = scan.result.surfaces.size();
+    const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+    EXPECT_EQ(stats.windowGaps, 0u);
+    EXPECT_EQ(stats.holes, 0u);
+    EXPECT_EQ(scan.result.surfaces.size(), before);
+  }
+}
+
+TEST(RimHoles, ABarStandingThroughAWindowIsNoWindow) {
+  // A rectangular bar 8 x 3 standing through the plate, its sides not
+  // detected: both faces show the same rectangular gap, but the bar's top
+  // shows above the top face inside it, with no face at that height around.
+  std::mt19937 rng(13);
+  const auto keep = outsideRectangle(0.0, 0.0, 4.0, 1.5, 0.0);
+  FaceScan scan;
+  scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  sides(scan, 0.4, rng);
+  for (double x = -3.8; x <= 3.8; x += 0.4) {
+    for (double y = -1.3; y <= 1.3; y += 0.4) scan.loose(Vec3(x, y, 6.0), Vec3::UnitZ());
+  }
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  EXPECT_EQ(stats.windowGaps, 2u);
+  EXPECT_EQ(stats.windows, 0u);
   EXPECT_EQ(scan.result.surfaces.size(), before);
 }
 
@@ -493,6 +643,49 @@ TEST(RimHoles, TheMainJobFindsAHoleOfTheCountersunkPlateFromItsRimInItsScannerSc
   ASSERT_TRUE(without.ok());
   EXPECT_EQ(without.rimHoles.holes, 0u);
   EXPECT_EQ(holesAlongZ(with), holesAlongZ(without) + with.rimHoles.holes);
+}
+
+TEST(RimHoles, TheMainJobCutsTheWindowOfTheSheetBracketFromItsRimsInItsScannerScan) {
+  // The bundled sheet bracket's scanner scan (raw x y z): a 20 x 5 window
+  // through its 1.5 thick wall, whose sides the scanner sees edge-on, so no
+  // surface bounds it and the tree filled it (2.6 % of the part's volume).
+  // Both faces of the wall show it as a rectangular gap: its sides become
+  // planes, the hypotheses a box, and the tree cuts it.
+  const std::filesystem::path dir = test::dataDir() / "thin" / "sheet_bracket";
+  const Scan scan = readScan(dir / "scan_scanner.ply");
+  ASSERT_TRUE(scan.info.normalsEstimated);
+  const CsgTree truth = readTreeJson(dir / "tree.json");
+  ReconstructOptions options;
+  options.detect.estimatedNormals = true;
+  const Reconstruction with = reconstruct(scan.cloud, options);
+  ASSERT_TRUE(with.ok()) << with.message;
+  EXPECT_EQ(with.rimWindows, 1u);
+  options.rims.windows = false;
+  const Reconstruction without = reconstruct(scan.cloud, options);
+  ASSERT_TRUE(without.ok()) << without.message;
+  EXPECT_EQ(without.rimWindows, 0u);
+  // The window's inside (x in [-10, 10], z in [15, 20], through the wall at
+  // y in [-20, -18.5]), a millimetre in from its sides.
+  const auto filled = [](const CsgTree& tree) {
+    int in = 0, all = 0;
+    for (double x = -9.0; x <= 9.0; x += 0.5) {
+      for (double z = 16.0; z <= 19.0; z += 0.5) {
+        for (double y = -19.9; y <= -18.6; y += 0.26) {
+          in += tree.contains(Vec3(x, y, z)) ? 1 : 0;
+          ++all;
+        }
+      }
+    }
+    return double(in) / all;
+  };
+  const double iouWith = test::treeIou(with.tree, truth);
+  const double iouWithout = test::treeIou(without.tree, truth);
+  std::printf(
+      "sheet_bracket scanner: window filled %.3f with windows, %.3f without; IoU %.4f, %.4f\n",
+      filled(with.tree), filled(without.tree), iouWith, iouWithout);
+  EXPECT_GT(filled(without.tree), 0.9);  // the gap this finds
+  EXPECT_LT(filled(with.tree), 0.05);
+  EXPECT_GT(iouWith, iouWithout + 0.01);  // measured 0.967 against 0.948
 }
 
 TEST(RimHoles, TheMainJobCutsTheSmallHolesOfInverseCsgPart159FromItsScannerScan) {
