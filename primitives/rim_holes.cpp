@@ -134,15 +134,15 @@ struct WindowShape {
 // sides around it: the empty room farther than half the seed's radius from
 // every point (the gap shrunk by that much, its corners kept) gives the
 // rectangle's orientation (its minimum-area rectangle) and the sides' first
-// places; along each side the nearest point of each stretch two spacings
-// long must be there, at one distance (their spread at most `roundness`
-// times the half width plus `roundnessSpacings` spacings, as a round rim's
-// sectors), and the side lies at their median. The room must not reach the
-// grid's border (a notch in the face's edge), and the rectangle may hold no
-// more than kMinEvidence points two spacings in from its sides (the strips
-// along a thin wall's window sides hold points of blended normals).
-bool findWindow(const std::vector<Vec3>& flat, const FaceGrid& grid, const Peak& seed,
-                double spacing, double maxHalf, const RimHoleOptions& options, WindowShape& out) {
+// places; along each side the nearest point (of the face's, or of `edges`)
+// of each stretch two spacings long must be there, at one distance (their spread at most
+// `roundness` times the half width plus `roundnessSpacings` spacings, as a round rim's sectors),
+// and the side lies at their median. The room must not reach the grid's border (a notch in the
+// face's edge), and the rectangle may hold no more than kMinEvidence points two spacings in from
+// its sides (the strips along a thin wall's window sides hold points of blended normals).
+bool findWindow(const std::vector<Vec3>& flat, const std::vector<Vec2>& edges, const FaceGrid& grid,
+                const Peak& seed, double spacing, double maxHalf, const RimHoleOptions& options,
+                WindowShape& out) {
   const double theta = 0.5 * seed.radius;
   const std::size_t maxCells =
       std::size_t(std::ceil(4.0 * maxHalf * maxHalf / (grid.cell * grid.cell))) + 1;
@@ -182,6 +182,11 @@ bool findWindow(const std::vector<Vec3>& flat, const FaceGrid& grid, const Peak&
   std::vector<Vec2> near;  // the points around the room, in (along, across)
   grid.forEachNear(boxLo - Vec2::Constant(reach), boxHi + Vec2::Constant(reach),
                    [&](std::uint32_t k) { near.push_back(shape.local(flat[k].head<2>())); });
+  for (const Vec2& q : edges) {
+    if ((q.array() >= boxLo.array() - reach).all() && (q.array() <= boxHi.array() + reach).all()) {
+      near.push_back(shape.local(q));
+    }
+  }
   // Each side: its axis (0 along, 1 across) and its sign.
   const double halfWidth0 = 0.5 * (hi.y() - lo.y()) + theta;
   std::array<double, 4> place{};  // of each side, signed along its axis
@@ -287,6 +292,21 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     lo = lo.cwiseMin(flat[k].head<2>());
     hi = hi.cwiseMax(flat[k].head<2>());
   }
+  // The points within epsilon of the face that do not face its way: the
+  // strips along its edges where estimated normals blend, and the tops of
+  // the walls that meet it. A window's sides lie where they are, often a
+  // spacing or two in from the face's own points.
+  std::vector<Vec2> edges;
+  if (options.windows) {
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const Vec3& p = cloud.points[i];
+      if (std::abs(p.dot(plane->normal) - plane->offset) > result.epsilon ||
+          cloud.normals[i].dot(plane->normal) >= kFacing) {
+        continue;
+      }
+      edges.emplace_back(p.dot(u), p.dot(v));
+    }
+  }
   const NearestNeighbors nn(flat);
   // (The thresholds below were measured with this estimate on at most 2000
   // points: estimateSpacing's, on 4000 with the mean of the two middle
@@ -386,7 +406,8 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
   // A gap that is not round may be a rectangle (a window or a slot).
   const auto tryWindow = [&](const Peak& cand) {
     WindowShape shape;
-    if (!options.windows || !findWindow(flat, grid, cand, spacing, maxRadius, options, shape)) {
+    if (!options.windows ||
+        !findWindow(flat, edges, grid, cand, spacing, maxRadius, options, shape)) {
       return;
     }
     const Vec2 reachOut = Vec2::Constant(shape.halfLength + 3.0 * spacing);
@@ -561,9 +582,44 @@ void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vect
       lo = lo.cwiseMax(Vec2(c.dot(e0) - l0, c.dot(e1) - l1));
       hi = hi.cwiseMin(Vec2(c.dot(e0) + l0, c.dot(e1) + l1));
     }
+    const double band = std::max(eps, std::max(ra.spacing, rb.spacing));
+    // A side whose own points the scan holds lies at their median: a face
+    // loses points along its edges (blended normals, depth edges), so its
+    // gap reaches past the side. Its points: no surface holds them, they lie
+    // between the faces, within three spacings inside the side or one
+    // outside it, along it, their normals pointing into the window.
+    {
+      std::array<std::vector<double>, 4> at;
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (result.assignment[i] >= 0) continue;
+        const Vec3 d = cloud.points[i] - ra.center;
+        const double t = -d.dot(n);
+        if (t <= eps || t >= depth - eps) continue;
+        const double x = d.dot(e0), y = d.dot(e1);
+        const double nx = cloud.normals[i].dot(e0), ny = cloud.normals[i].dot(e1);
+        const std::array<double, 4> off{x - hi.x(), lo.x() - x, y - hi.y(), lo.y() - y};
+        const std::array<double, 4> facing{nx, -nx, ny, -ny};
+        const std::array<bool, 4> along{y > lo.y() && y<hi.y(), y> lo.y() && y<hi.y(), x> lo.x() &&
+                                        x<hi.x(), x> lo.x() && x < hi.x()};
+        for (std::size_t k = 0; k < 4; ++k) {
+          if (along[k] && off[k] >= -3.0 * band && off[k] <= band && facing[k] < -kAcrossAxis) {
+            at[k].push_back(off[k]);
+          }
+        }
+      }
+      std::array<double, 4> shift{};
+      for (std::size_t k = 0; k < 4; ++k) {
+        if (at[k].size() >= kMinEvidence) shift[k] = median(std::move(at[k]));
+      }
+      if (hi.x() + shift[0] > lo.x() - shift[1] && hi.y() + shift[2] > lo.y() - shift[3]) {
+        hi.x() += shift[0];
+        lo.x() -= shift[1];
+        hi.y() += shift[2];
+        lo.y() -= shift[3];
+      }
+    }
     const Vec3 center = ra.center + 0.5 * (lo.x() + hi.x()) * e0 + 0.5 * (lo.y() + hi.y()) * e1;
     const std::array<double, 2> half{0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y())};
-    const double band = std::max(eps, std::max(ra.spacing, rb.spacing));
     // Side k: axis k / 2 (0 along, 1 across), sign + for even k; its
     // outward normal points into the window.
     const auto sideAxis = [&](int k) { return (k / 2 == 0 ? e0 : e1) * (k % 2 == 0 ? 1.0 : -1.0); };
