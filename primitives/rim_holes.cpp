@@ -534,6 +534,23 @@ bool explained(const DetectionResult& result, const Rim& rim) {
   return false;
 }
 
+// True when the heights above a face of the points facing its way, inside
+// a gap (`inside`) and around it (`around`), show a cap: at least
+// kMinEvidence inside at one height (within `eps` of their median) and fewer
+// than a quarter as many at that height around it. A rod or a bar standing
+// through the face shows its top so; a face above the gap that reaches past
+// it (an overhang's) does not.
+bool isCap(const std::vector<double>& inside, const std::vector<double>& around, double eps) {
+  if (inside.size() < kMinEvidence) return false;
+  const double top = median(inside);
+  const auto atTop = [&](const std::vector<double>& heights) {
+    return std::size_t(std::count_if(heights.begin(), heights.end(),
+                                     [&](double t) { return std::abs(t - top) <= eps; }));
+  };
+  const std::size_t cap = atTop(inside);
+  return cap >= kMinEvidence && 4 * atTop(around) < cap;
+}
+
 // Component of d across the unit axis n.
 Vec3 lateral(const Vec3& d, const Vec3& n) { return d - d.dot(n) * n; }
 
@@ -675,14 +692,7 @@ void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vect
         if (out < -band) capHeights.push_back(t);
         if (out > 2.0 * band && out < half[1]) aroundHeights.push_back(t);
       }
-      if (capHeights.size() < kMinEvidence) return false;
-      const double top = median(capHeights);
-      const auto atTop = [&](const std::vector<double>& heights) {
-        return std::size_t(std::count_if(heights.begin(), heights.end(),
-                                         [&](double t) { return std::abs(t - top) <= eps; }));
-      };
-      const std::size_t cap = atTop(capHeights);
-      return cap >= kMinEvidence && 4 * atTop(aroundHeights) < cap;
+      return isCap(capHeights, aroundHeights, eps);
     };
     if (capped(center, n) || capped(center - depth * n, rb.normal)) continue;
     used[a] = used[partner] = 1;
@@ -858,15 +868,7 @@ RimHoleStats addRimHoles(const PointCloud& cloud, DetectionResult& result,
     // shows above the gap: a cap of points facing the face's way, at one
     // height, with no face at that height around it (a face above the hole
     // that reaches past it, as an overhang's would, is no cap).
-    if (capHeights.size() >= kMinEvidence) {
-      const double top = median(capHeights);
-      const auto atTop = [&](const std::vector<double>& heights) {
-        return std::size_t(std::count_if(heights.begin(), heights.end(),
-                                         [&](double t) { return std::abs(t - top) <= eps; }));
-      };
-      const std::size_t cap = atTop(capHeights);
-      if (cap >= kMinEvidence && 4 * atTop(aroundHeights) < cap) continue;
-    }
+    if (isCap(capHeights, aroundHeights, eps)) continue;
     if (depth < 0.0 && (wall.size() < kMinEvidence || wallDepth <= 2.0 * eps)) continue;
     used[a] = 1;
     Surface hole;

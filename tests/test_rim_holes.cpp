@@ -255,6 +255,14 @@ TEST(RimHoles, NothingIsInventedWhereTheScanShowsNoDepthOrTheGapIsNotRound) {
   EXPECT_EQ(scan.result.surfaces.size(), before + 4);
 }
 
+// The plate's top and bottom faces without the points `keep` refuses, then
+// its sides, all 0.4 apart.
+void plateKeeping(FaceScan& scan, const std::function<bool(const Vec3&)>& keep, std::mt19937& rng) {
+  scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
+  scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
+  sides(scan, 0.4, rng);
+}
+
 // The planes added from `from` on.
 std::vector<const PlaneSurface*> planesOf(const DetectionResult& result, std::size_t from) {
   std::vector<const PlaneSurface*> out;
@@ -285,9 +293,7 @@ TEST(RimHoles, WindowsThroughAWallBecomeThePlanesOfTheirSides) {
   const double turn = std::numbers::pi / 6.0;
   const auto keep = outsideRectangle(2.0, 1.0, 6.0, 2.5, turn);
   FaceScan scan;
-  scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-  scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
-  sides(scan, 0.4, rng);
+  plateKeeping(scan, keep, rng);
   scan.finish();
   const std::size_t before = scan.result.surfaces.size();
   const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
@@ -322,9 +328,7 @@ TEST(RimHoles, AWindowsSidesLieWhereTheirOwnPointsAreNotWhereTheFacesStop) {
   std::mt19937 rng(17);
   const auto keep = outsideRectangle(0.0, 0.0, 6.0, 2.5, 0.0, 0.6);
   FaceScan scan;
-  scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-  scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
-  sides(scan, 0.4, rng);
+  plateKeeping(scan, keep, rng);
   std::uniform_real_distribution<double> along(-0.8, 0.8), depth(-1.5, 1.5);
   for (int k = 0; k < 8; ++k) {
     scan.loose(Vec3(6.0, 2.5 * along(rng), depth(rng)), -Vec3::UnitX());
@@ -369,9 +373,7 @@ TEST(RimHoles, ARectangularGapInOneFaceOnlyOrAWindowFoundAlreadyAddsNothing) {
   {
     const auto keep = outsideRectangle(0.0, 0.0, 7.0, 3.0, 0.0);
     FaceScan scan;
-    scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-    scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
-    sides(scan, 0.4, rng);
+    plateKeeping(scan, keep, rng);
     scan.face(-Vec3::UnitX(), -7.0, anywhere, Vec3(7, -3, -2), Vec3(7, 3, 2), 0.4, rng);
     scan.face(Vec3::UnitX(), -7.0, anywhere, Vec3(-7, -3, -2), Vec3(-7, 3, 2), 0.4, rng);
     scan.face(-Vec3::UnitY(), -3.0, anywhere, Vec3(-7, 3, -2), Vec3(7, 3, 2), 0.4, rng);
@@ -392,9 +394,7 @@ TEST(RimHoles, ARectangularGapInOneFaceOnlyOrAWindowFoundAlreadyAddsNothing) {
              outsideRectangle(0.0, 0.0, 2.0, 7.0, 0.0)(p);
     };
     FaceScan scan;
-    scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-    scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
-    sides(scan, 0.4, rng);
+    plateKeeping(scan, keep, rng);
     scan.finish();
     const std::size_t before = scan.result.surfaces.size();
     const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
@@ -411,9 +411,7 @@ TEST(RimHoles, ABarStandingThroughAWindowIsNoWindow) {
   std::mt19937 rng(13);
   const auto keep = outsideRectangle(0.0, 0.0, 4.0, 1.5, 0.0);
   FaceScan scan;
-  scan.face(Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, 2), Vec3(20, 15, 2), 0.4, rng);
-  scan.face(-Vec3::UnitZ(), 2.0, keep, Vec3(-20, -15, -2), Vec3(20, 15, -2), 0.4, rng);
-  sides(scan, 0.4, rng);
+  plateKeeping(scan, keep, rng);
   for (double x = -3.8; x <= 3.8; x += 0.4) {
     for (double y = -1.3; y <= 1.3; y += 0.4) scan.loose(Vec3(x, y, 6.0), Vec3::UnitZ());
   }
@@ -718,7 +716,7 @@ TEST(RimHoles, TheMainJobCutsTheWindowOfTheSheetBracketFromItsRimsInItsScannerSc
       filled(with.tree), filled(without.tree), iouWith, iouWithout);
   EXPECT_GT(filled(without.tree), 0.9);  // the gap this finds
   EXPECT_LT(filled(with.tree), 0.05);
-  EXPECT_GT(iouWith, iouWithout + 0.01);  // measured 0.967 against 0.948
+  EXPECT_GT(iouWith, iouWithout + 0.01);  // measured 0.969 against 0.948
 }
 
 TEST(RimHoles, TheMainJobCutsTheSlotsOfASheetFromTheirRimsInItsScannerScan) {

@@ -40,7 +40,7 @@ const std::vector<KnownGap> kKnownGaps = {
      "12 sectors, so the bore opening leaves it to the winding number) and the radial "
      "set-screw hole (2 voxels across); 1587 and 568 of the 2488 false inside voxels"},
     {"sheet_bracket", 0.95,
-     "IoU 0.967, 9 primitives for 5: the holes' radii come out 0.5 mm too large, each with a "
+     "IoU 0.969, 9 primitives for 5: the holes' radii come out 0.5 mm too large, each with a "
      "torus along its rim, and a thin cylinder along each end of the wall (blended normals "
      "at the 1.5 mm sheet's edges); the 20 x 5 mm window through the wall is cut since it is "
      "found from its rims (0.948 with 14 primitives when it was filled, 2.6 % of the volume; "
