@@ -48,8 +48,10 @@ struct RimHoleOptions {
 
 /// What addRimHoles found.
 struct RimHoleStats {
-  std::size_t gaps = 0;        ///< round gaps found in the planes
-  std::size_t explained = 0;   ///< of those, rims that a curved surface found already explains
+  std::size_t gaps = 0;  ///< round gaps found in the planes
+  /// Round rims that a curved surface found already explains, and windows
+  /// whose four sides detection found already (count).
+  std::size_t explained = 0;
   std::size_t holes = 0;       ///< hole cylinders added
   std::size_t windowGaps = 0;  ///< rectangular gaps found in the planes
   std::size_t windows = 0;     ///< windows through a wall added (as the planes of their sides)
