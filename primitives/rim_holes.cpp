@@ -63,8 +63,7 @@ struct Rim {
   std::vector<std::uint32_t> points;  // the plane's inliers around the gap
   // A rectangular gap (a window) instead of a round one: `center` is the
   // rectangle's, `along` the unit direction of its longer side (in the
-  // plane), `halfLength` >= `halfWidth` its half sides; `radius` is
-  // `halfWidth`.
+  // plane), `halfLength` >= `halfWidth` its half sides (`radius` unused).
   bool window = false;
   Vec3 along = Vec3::UnitX();
   double halfLength = 0.0;
@@ -292,21 +291,6 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     lo = lo.cwiseMin(flat[k].head<2>());
     hi = hi.cwiseMax(flat[k].head<2>());
   }
-  // The points within epsilon of the face that do not face its way: the
-  // strips along its edges where estimated normals blend, and the tops of
-  // the walls that meet it. A window's sides lie where they are, often a
-  // spacing or two in from the face's own points.
-  std::vector<Vec2> edges;
-  if (options.windows) {
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const Vec3& p = cloud.points[i];
-      if (std::abs(p.dot(plane->normal) - plane->offset) > result.epsilon ||
-          cloud.normals[i].dot(plane->normal) >= kFacing) {
-        continue;
-      }
-      edges.emplace_back(p.dot(u), p.dot(v));
-    }
-  }
   const NearestNeighbors nn(flat);
   // (The thresholds below were measured with this estimate on at most 2000
   // points: estimateSpacing's, on 4000 with the mean of the two middle
@@ -403,13 +387,29 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     return !(around.size() >= kMinPeaks &&
              radius < options.minPeakRatio * median(std::move(around)));
   };
+  // The points within epsilon of the face that do not face its way: the
+  // strips along its edges where estimated normals blend, and the tops of
+  // the walls that meet it. A window's sides lie where they are, often a
+  // spacing or two in from the face's own points. Gathered for the face's
+  // first gap that is not round (most faces have none).
+  std::vector<Vec2> edges;
+  bool edgesGathered = false;
   // A gap that is not round may be a rectangle (a window or a slot).
   const auto tryWindow = [&](const Peak& cand) {
-    WindowShape shape;
-    if (!options.windows ||
-        !findWindow(flat, edges, grid, cand, spacing, maxRadius, options, shape)) {
-      return;
+    if (!options.windows) return;
+    if (!edgesGathered) {
+      edgesGathered = true;
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Vec3& p = cloud.points[i];
+        if (std::abs(p.dot(plane->normal) - plane->offset) > result.epsilon ||
+            cloud.normals[i].dot(plane->normal) >= kFacing) {
+          continue;
+        }
+        edges.emplace_back(p.dot(u), p.dot(v));
+      }
     }
+    WindowShape shape;
+    if (!findWindow(flat, edges, grid, cand, spacing, maxRadius, options, shape)) return;
     const Vec2 reachOut = Vec2::Constant(shape.halfLength + 3.0 * spacing);
     std::vector<std::size_t> pool;
     grid.forEachNear(shape.center - reachOut, shape.center + reachOut,
@@ -425,7 +425,6 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     r.plane = s;
     r.normal = plane->normal;
     r.center = plane->offset * plane->normal + shape.center.x() * u + shape.center.y() * v;
-    r.radius = shape.halfWidth;
     r.spacing = spacing;
     r.points = std::move(ring);
     r.window = true;
@@ -565,7 +564,8 @@ Vec3 lateral(const Vec3& d, const Vec3& n) { return d - d.dot(n) * n; }
 void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vector<char>& used,
                 DetectionResult& result, RimHoleStats& stats) {
   const double eps = result.epsilon;
-  const std::size_t found = result.surfaces.size();
+  // The surfaces there were before (the round holes added are no planes).
+  const std::size_t detected = result.surfaces.size();
   for (std::size_t a = 0; a < rims.size(); ++a) {
     if (used[a] || !rims[a].window) continue;
     const Rim& ra = rims[a];
@@ -590,7 +590,8 @@ void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vect
     if (partner == rims.size()) continue;
     const Rim& rb = rims[partner];
     // The window: the overlap of the two gaps (a sparse face shows a gap
-    // larger than the window, never smaller), on the first face's plane.
+    // larger than the window, never smaller), in the frame (e0, e1) about
+    // the first rim's centre: [lo.x, hi.x] x [lo.y, hi.y].
     const Vec3 e0 = ra.along, e1 = n.cross(e0);
     Vec2 lo = Vec2::Constant(-std::numeric_limits<double>::infinity()), hi = -lo;
     for (const Rim* rim : {&ra, &rb}) {
@@ -600,29 +601,51 @@ void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vect
       hi = hi.cwiseMin(Vec2(c.dot(e0) + l0, c.dot(e1) + l1));
     }
     const double band = std::max(eps, std::max(ra.spacing, rb.spacing));
+    // Side k (+e0, -e0, +e1, -e1): its unit direction out of the window; its
+    // plane's outward normal is the opposite (it faces into the window).
+    const std::array<Vec3, 4> sideAxis{e0, -e0, e1, -e1};
+    // How far the point at d from the first rim's centre lies beyond each
+    // side (negative inside it); the largest is how far it lies outside the
+    // window.
+    const auto beyond = [&](const Vec3& d) {
+      const double x = d.dot(e0), y = d.dot(e1);
+      return std::array<double, 4>{x - hi.x(), lo.x() - x, y - hi.y(), lo.y() - y};
+    };
+    const auto outside = [&](const Vec3& d) {
+      const std::array<double, 4> b = beyond(d);
+      return *std::max_element(b.begin(), b.end());
+    };
+    // The side of the window whose own point the point i at d may be: the
+    // first side k into which its normal points (across the axis) with
+    // accept(beyond(d)[k]), lying along it (less than `slack` beyond the
+    // other two sides); -1 for none.
+    const auto sideOf = [&](std::size_t i, const Vec3& d, double slack, const auto& accept) {
+      const std::array<double, 4> b = beyond(d);
+      for (std::size_t k = 0; k < 4; ++k) {
+        const std::size_t o = k < 2 ? 2 : 0;  // the other two sides
+        if (b[o] < slack && b[o + 1] < slack && cloud.normals[i].dot(sideAxis[k]) < -kAcrossAxis &&
+            accept(b[k])) {
+          return int(k);
+        }
+      }
+      return -1;
+    };
+    const auto between = [&](std::size_t i, const Vec3& d) {
+      const double t = -d.dot(n);
+      return result.assignment[i] < 0 && t > eps && t < depth - eps;
+    };
     // A side whose own points the scan holds lies at their median: a face
     // loses points along its edges (blended normals, depth edges), so its
-    // gap reaches past the side. Its points: no surface holds them, they lie
-    // between the faces, within three spacings inside the side or one
-    // outside it, along it, their normals pointing into the window.
+    // gap reaches past the side. Its points lie within three spacings inside
+    // it or one outside.
     {
       std::array<std::vector<double>, 4> at;
       for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (result.assignment[i] >= 0) continue;
         const Vec3 d = cloud.points[i] - ra.center;
-        const double t = -d.dot(n);
-        if (t <= eps || t >= depth - eps) continue;
-        const double x = d.dot(e0), y = d.dot(e1);
-        const double nx = cloud.normals[i].dot(e0), ny = cloud.normals[i].dot(e1);
-        const std::array<double, 4> off{x - hi.x(), lo.x() - x, y - hi.y(), lo.y() - y};
-        const std::array<double, 4> facing{nx, -nx, ny, -ny};
-        const std::array<bool, 4> along{y > lo.y() && y<hi.y(), y> lo.y() && y<hi.y(), x> lo.x() &&
-                                        x<hi.x(), x> lo.x() && x < hi.x()};
-        for (std::size_t k = 0; k < 4; ++k) {
-          if (along[k] && off[k] >= -3.0 * band && off[k] <= band && facing[k] < -kAcrossAxis) {
-            at[k].push_back(off[k]);
-          }
-        }
+        if (!between(i, d)) continue;
+        const auto near = [&](double off) { return off >= -3.0 * band && off <= band; };
+        const int k = sideOf(i, d, 0.0, near);
+        if (k >= 0) at[std::size_t(k)].push_back(beyond(d)[std::size_t(k)]);
       }
       std::array<double, 4> shift{};
       for (std::size_t k = 0; k < 4; ++k) {
@@ -635,53 +658,39 @@ void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vect
         lo.y() -= shift[3];
       }
     }
-    const Vec3 center = ra.center + 0.5 * (lo.x() + hi.x()) * e0 + 0.5 * (lo.y() + hi.y()) * e1;
-    const std::array<double, 2> half{0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y())};
-    // Side k: axis k / 2 (0 along, 1 across), sign + for even k; its
-    // outward normal points into the window.
-    const auto sideAxis = [&](int k) { return (k / 2 == 0 ? e0 : e1) * (k % 2 == 0 ? 1.0 : -1.0); };
+    // The rims' points go to the side they lie beyond.
     std::array<std::vector<std::uint32_t>, 4> sidePoints;
     for (const Rim* rim : {&ra, &rb}) {
       for (std::uint32_t i : rim->points) {
-        const Vec3 d = cloud.points[i] - center;
-        const double x = d.dot(e0), y = d.dot(e1);
-        const std::array<double, 4> beyond{x - half[0], -x - half[0], y - half[1], -y - half[1]};
-        const int k = int(std::max_element(beyond.begin(), beyond.end()) - beyond.begin());
-        sidePoints[std::size_t(k)].push_back(i);
+        const std::array<double, 4> b = beyond(cloud.points[i] - ra.center);
+        sidePoints[std::size_t(std::max_element(b.begin(), b.end()) - b.begin())].push_back(i);
       }
     }
-    // How far a point lies outside the window, across the axis.
-    const auto outside = [&](const Vec3& d) {
-      return std::max(std::abs(d.dot(e0)) - half[0], std::abs(d.dot(e1)) - half[1]);
-    };
-    std::size_t inside = 0;
+    // Points inside the window between the faces, and each side's own points
+    // (within a spacing or epsilon of it).
+    std::size_t inside = 0, wallCount = 0;
     std::array<std::vector<std::uint32_t>, 4> wall;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const Vec3 d = cloud.points[i] - center;
+      const Vec3 d = cloud.points[i] - ra.center;
       const double t = -d.dot(n);
       if (t < -eps || t > depth + eps) continue;
-      const Vec2 l(d.dot(e0), d.dot(e1));
       const double out = outside(d);
       if (out < -band && t > eps && t < depth - eps) ++inside;
       if (result.assignment[i] >= 0 || std::abs(out) > band) continue;
       if (std::abs(cloud.normals[i].dot(n)) > kAcrossAxis) continue;
-      // The side it lies on: the one it is nearest to, across which its
-      // normal points.
-      for (int k = 0; k < 4; ++k) {
-        const double off = (k / 2 == 0 ? l.x() : l.y()) * (k % 2 == 0 ? 1.0 : -1.0);
-        if (std::abs(off - half[std::size_t(k / 2)]) <= band &&
-            cloud.normals[i].dot(sideAxis(k)) < -kAcrossAxis) {
-          wall[std::size_t(k)].push_back(std::uint32_t(i));
-          break;
-        }
+      // (Within band of the window, so at most band beyond the other sides.)
+      const auto on = [&](double off) { return std::abs(off) <= band; };
+      const int k = sideOf(i, d, std::numeric_limits<double>::infinity(), on);
+      if (k >= 0) {
+        wall[std::size_t(k)].push_back(std::uint32_t(i));
+        ++wallCount;
       }
     }
-    std::size_t wallCount = 0;
-    for (const auto& w : wall) wallCount += w.size();
     if (inside > kMinEvidence + wallCount / 10) continue;
     // A bar standing through the wall: its top shows above one of the two
     // faces, inside the window, at one height with no face at that height
     // around it.
+    const double halfWidth = 0.5 * (hi.y() - lo.y());  // across the rims' longer side
     const auto capped = [&](const Vec3& faceCenter, const Vec3& faceNormal) {
       std::vector<double> capHeights, aroundHeights;
       for (std::size_t i = 0; i < cloud.size(); ++i) {
@@ -690,41 +699,43 @@ void addWindows(const PointCloud& cloud, const std::vector<Rim>& rims, std::vect
         if (t >= -eps || cloud.normals[i].dot(faceNormal) < kFacing) continue;
         const double out = outside(d);
         if (out < -band) capHeights.push_back(t);
-        if (out > 2.0 * band && out < half[1]) aroundHeights.push_back(t);
+        if (out > 2.0 * band && out < halfWidth) aroundHeights.push_back(t);
       }
       return isCap(capHeights, aroundHeights, eps);
     };
-    if (capped(center, n) || capped(center - depth * n, rb.normal)) continue;
+    if (capped(ra.center, n) || capped(ra.center - depth * n, rb.normal)) continue;
     used[a] = used[partner] = 1;
-    // The sides' planes; a side whose plane was found already keeps it.
+    // The sides' planes (through the point of side k on the axis of the
+    // first rim); a side whose plane detection found already keeps it.
+    const std::array<double, 4> place{hi.x(), -lo.x(), hi.y(), -lo.y()};
+    std::array<PlaneSurface, 4> planes;
     std::array<bool, 4> missing{};
-    for (int k = 0; k < 4; ++k) {
-      const Vec3 normal = -sideAxis(k);
-      const double offset = normal.dot(center - half[std::size_t(k / 2)] * normal);
-      missing[std::size_t(k)] =
-          std::none_of(result.surfaces.begin(), result.surfaces.begin() + std::ptrdiff_t(found),
+    for (std::size_t k = 0; k < 4; ++k) {
+      const Vec3 normal = -sideAxis[k];
+      planes[k] = PlaneSurface{normal, normal.dot(ra.center + place[k] * sideAxis[k])};
+      missing[k] =
+          std::none_of(result.surfaces.begin(), result.surfaces.begin() + std::ptrdiff_t(detected),
                        [&](const Surface& s) {
                          const auto* p = s.as<PlaneSurface>();
                          return p != nullptr && p->normal.dot(normal) > kParallel &&
-                                std::abs(p->offset - offset) <= 2.0 * eps + band;
+                                std::abs(p->offset - planes[k].offset) <= 2.0 * eps + band;
                        });
     }
     if (std::none_of(missing.begin(), missing.end(), [](bool m) { return m; })) {
       ++stats.explained;
       continue;
     }
-    for (int k = 0; k < 4; ++k) {
-      if (!missing[std::size_t(k)]) continue;
-      const Vec3 normal = -sideAxis(k);
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (!missing[k]) continue;
       Surface side;
-      side.shape = PlaneSurface{normal, normal.dot(center - half[std::size_t(k / 2)] * normal)};
+      side.shape = planes[k];
       side.rms = std::max(result.noise, 1e-9 * result.diagonal);
-      std::vector<std::uint32_t> points = sidePoints[std::size_t(k)];
-      points.insert(points.end(), wall[std::size_t(k)].begin(), wall[std::size_t(k)].end());
+      std::vector<std::uint32_t> points = sidePoints[k];
+      points.insert(points.end(), wall[k].begin(), wall[k].end());
       std::sort(points.begin(), points.end());
       points.erase(std::unique(points.begin(), points.end()), points.end());
       const int index = int(result.surfaces.size());
-      for (std::uint32_t i : wall[std::size_t(k)]) result.assignment[i] = index;
+      for (std::uint32_t i : wall[k]) result.assignment[i] = index;
       Vec3 sum = Vec3::Zero();
       for (std::uint32_t i : points) sum += cloud.points[i];
       if (result.centroids.size() == result.surfaces.size()) {

@@ -352,6 +352,44 @@ TEST(RimHoles, AWindowsSidesLieWhereTheirOwnPointsAreNotWhereTheFacesStop) {
   }
 }
 
+TEST(RimHoles, AWindowsSidesLieWhereTheFacesBlendedEdgeStripsEnd) {
+  // The same window, its faces' own points stopping 0.6 from its sides, but
+  // no point of the sides themselves: the strips in between lie on the
+  // faces' planes with normals tilted 60 degrees into the window (blended
+  // across the edge), so they are no face points. The sides lie where the
+  // strips end (within the strips' own spacing, 0.4 with 0.1 of jitter,
+  // less than half the 0.6).
+  std::mt19937 rng(19);
+  FaceScan scan;
+  plateKeeping(scan, outsideRectangle(0.0, 0.0, 6.0, 2.5, 0.0, 0.6), rng);
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  for (const double z : {2.0, -2.0}) {
+    for (double x = -6.4; x <= 6.4; x += 0.4) {
+      for (double y = -2.9; y <= 2.9; y += 0.4) {
+        const double px = x + jitter(rng), py = y + jitter(rng);
+        const double ox = std::abs(px) - 6.0, oy = std::abs(py) - 2.5;
+        const double out = std::max(ox, oy);
+        if (out <= 0.0 || out > 0.6) continue;  // the strip around the window
+        // Tilted towards the window, across the side it is nearest to.
+        const Vec3 across =
+            ox > oy ? Vec3(px > 0 ? -1.0 : 1.0, 0.0, 0.0) : Vec3(0.0, py > 0 ? -1.0 : 1.0, 0.0);
+        scan.loose(Vec3(px, py, z),
+                   (0.5 * Vec3(0.0, 0.0, z > 0 ? 1.0 : -1.0) + 0.866 * across).normalized());
+      }
+    }
+  }
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  ASSERT_EQ(stats.windows, 1u);
+  const auto planes = planesOf(scan.result, before);
+  ASSERT_EQ(planes.size(), 4u);
+  for (const PlaneSurface* p : planes) {
+    const double expected = std::abs(p->normal.x()) > 0.5 ? -6.0 : -2.5;
+    EXPECT_NEAR(p->offset, expected, 0.25) << p->normal.transpose();
+  }
+}
+
 TEST(RimHoles, ARectangularGapInOneFaceOnlyOrAWindowFoundAlreadyAddsNothing) {
   std::mt19937 rng(9);
   // The top face's gap only (the bottom face whole): a pocket's or a
