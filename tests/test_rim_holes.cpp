@@ -321,6 +321,21 @@ TEST(RimHoles, WindowsThroughAWallBecomeThePlanesOfTheirSides) {
   }
 }
 
+// Runs addRimHoles on `scan` (the plate with the window 12 x 5 about the
+// origin): one window, its four sides' planes within `tolerance` of them
+// (normal -x at x = 6, offset -6; +x at x = -6, offset -6; and so on).
+void expectOneWindowWithSidesAt(FaceScan& scan, double tolerance) {
+  const std::size_t before = scan.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
+  ASSERT_EQ(stats.windows, 1u);
+  const auto planes = planesOf(scan.result, before);
+  ASSERT_EQ(planes.size(), 4u);
+  for (const PlaneSurface* p : planes) {
+    const double expected = std::abs(p->normal.x()) > 0.5 ? -6.0 : -2.5;
+    EXPECT_NEAR(p->offset, expected, tolerance) << p->normal.transpose();
+  }
+}
+
 TEST(RimHoles, AWindowsSidesLieWhereTheirOwnPointsAreNotWhereTheFacesStop) {
   // A window 12 x 5 whose faces lose their points 0.6 from its sides (a
   // scanner's depth edges, blended normals), with a few points of each
@@ -338,15 +353,7 @@ TEST(RimHoles, AWindowsSidesLieWhereTheirOwnPointsAreNotWhereTheFacesStop) {
   }
   scan.finish();
   const std::size_t before = scan.result.surfaces.size();
-  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
-  ASSERT_EQ(stats.windows, 1u);
-  const auto planes = planesOf(scan.result, before);
-  ASSERT_EQ(planes.size(), 4u);
-  for (const PlaneSurface* p : planes) {
-    // normal -x at x = 6 (offset -6), +x at x = -6 (offset -6), and so on.
-    const double expected = std::abs(p->normal.x()) > 0.5 ? -6.0 : -2.5;
-    EXPECT_NEAR(p->offset, expected, 0.12) << p->normal.transpose();
-  }
+  expectOneWindowWithSidesAt(scan, 0.12);
   for (std::size_t s = before; s < scan.result.surfaces.size(); ++s) {
     EXPECT_GE(scan.result.surfaces[s].inliers.size(), 8u);  // with the side's own points
   }
@@ -379,15 +386,7 @@ TEST(RimHoles, AWindowsSidesLieWhereTheFacesBlendedEdgeStripsEnd) {
     }
   }
   scan.finish();
-  const std::size_t before = scan.result.surfaces.size();
-  const RimHoleStats stats = addRimHoles(scan.cloud, scan.result);
-  ASSERT_EQ(stats.windows, 1u);
-  const auto planes = planesOf(scan.result, before);
-  ASSERT_EQ(planes.size(), 4u);
-  for (const PlaneSurface* p : planes) {
-    const double expected = std::abs(p->normal.x()) > 0.5 ? -6.0 : -2.5;
-    EXPECT_NEAR(p->offset, expected, 0.25) << p->normal.transpose();
-  }
+  expectOneWindowWithSidesAt(scan, 0.25);
 }
 
 TEST(RimHoles, ARectangularGapInOneFaceOnlyOrAWindowFoundAlreadyAddsNothing) {
