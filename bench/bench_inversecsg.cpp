@@ -329,6 +329,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     if (rec.holesFromRims > 0) {
       res.note += ", " + std::to_string(rec.holesFromRims) + " holes from their rims";
     }
+    if (rec.sheetEdges > 0) {
+      res.note += ", " + std::to_string(rec.sheetEdges) + " rounds made sheet edges";
+    }
     if (rec.rimWindows > 0) {
       res.note += ", " + std::to_string(rec.rimWindows) + " windows from their rims";
     }

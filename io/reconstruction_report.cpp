@@ -89,6 +89,7 @@ Json voxelCounts(const Reconstruction& rec, const Construction& c) {
   return {{"surfaces", rec.detection.surfaces.size()},
           {"holes_from_rims", rec.holesFromRims},
           {"windows_from_rims", rec.rimWindows},
+          {"sheet_edges_from_rounds", rec.sheetEdges},
           {"bores_from_walls", rec.boresFromWalls},
           {"points_after_detection", rec.pointsAfterDetection},
           {"unseen_face_points", rec.unseenFacePoints},

@@ -154,6 +154,14 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
                                (out.wallBores.bores == 1 ? "" : "s") + " found from their walls";
     }
   }
+  if (options.sheetRounds && options.detect.estimatedNormals) {
+    out.sheetRounds = replaceSheetRounds(scan, out.detection, options.sheetRoundOptions);
+    const std::size_t edges = out.sheetRounds.tori + out.sheetRounds.cylinders;
+    if (edges > 0) {
+      out.detection.message += "; " + std::to_string(edges) + " round" + (edges == 1 ? "" : "s") +
+                               " taken for a thin sheet's square edge";
+    }
+  }
   if (options.rimHoles && options.detect.estimatedNormals) {
     out.rimHoles = addRimHoles(scan, out.detection, options.rimHoleOptions);
     if (out.rimHoles.holes > 0) {

@@ -15,6 +15,7 @@
 #include "primitives/hypotheses.h"
 #include "primitives/regularization.h"
 #include "primitives/rim_holes.h"
+#include "primitives/sheet_rounds.h"
 #include "primitives/surface_detection.h"
 #include "primitives/thin_features.h"
 #include "primitives/wall_bores.h"
@@ -66,6 +67,12 @@ struct DetectAndFitOptions {
   /// (addWallBores; before the rims): RANSAC overlooks many small ones.
   bool wallBores = true;
   WallBoreOptions wallBoreOptions;  ///< their parameters (the seed is the job's)
+  /// With normals estimated from raw points, the rounds that are a thin
+  /// sheet's square edges blended by the normals (replaceSheetRounds; before
+  /// the rims, whose holes a torus along the rim would hide) are dropped or
+  /// made end faces.
+  bool sheetRounds = true;
+  SheetRoundOptions sheetRoundOptions;  ///< their parameters
 };
 
 /// Bytes the voxel stage needs for `candidates` on `voxels` (the
@@ -82,6 +89,7 @@ struct SurfacesAndCandidates {
   std::vector<ThinFeature> thin;        ///< features thinner than thinVoxels at the asked one
   RimHoleStats rimHoles;                ///< holes found from their rims (rimHoles)
   WallBoreStats wallBores;              ///< bores found from their walls (wallBores)
+  SheetRoundStats sheetRounds;          ///< a thin sheet's edges read as rounds (sheetRounds)
   double detectSeconds = 0.0;           ///< RANSAC
   double fitSeconds = 0.0;              ///< the surface fit (Ceres)
   double regularizeSeconds = 0.0;       ///< regularisation

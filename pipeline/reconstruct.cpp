@@ -251,6 +251,7 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.thin = std::move(found.thin);
   out.holesFromRims = found.rimHoles.holes;
   out.rimWindows = found.rimHoles.windows;
+  out.sheetEdges = found.sheetRounds.tori + found.sheetRounds.cylinders;
   out.boresFromWalls = found.wallBores.bores;
   out.timeLimitHit = control.pastDeadline();
   if (!fitsInMemory(out, options)) return out;
@@ -354,6 +355,7 @@ Reconstruction reconstruct(const PointCloud& scan, const ReconstructOptions& opt
   fo.finerGrid = options.finerGrid && options.method != Method::Gp;
   fo.memoryLimit = options.memoryLimit;
   fo.rimHoleOptions = options.rims;
+  fo.sheetRounds = options.sheetRounds;
   SurfacesAndCandidates found =
       detectAndFit(scan, fo, onStage, [&](double fraction, std::string_view step) {
         return control.report(fraction, step) && !control.pastDeadline();

@@ -68,6 +68,7 @@ struct ReconstructOptions {
   UnseenFaceOptions unseen;    ///< labels closed over faces never seen (primitives/unseen_faces.h)
   BoreOpeningOptions bores;    ///< labels completed by the bores seen (voxel/seen_bores.h)
   RimHoleOptions rims;         ///< holes and windows found from their rims (raw scans)
+  bool sheetRounds = true;     ///< a thin sheet's edges read as rounds made edges (raw scans)
   ConstructOptions construct;  ///< voxel method: the two optimisations (snapDistance 0: one voxel)
   HybridOptions hybrid;        ///< hybrid method: the repair search (its seed is set from `seed`)
   FinishOptions finish;        ///< hybrid method: the parameter fit last (its fitness is set from
@@ -155,6 +156,9 @@ struct Reconstruction {
   std::size_t holesFromRims = 0;   ///< hole cylinders found from their rims (raw scans)
   std::size_t rimWindows = 0;      ///< windows found from their rims (raw scans)
   std::size_t boresFromWalls = 0;  ///< bore and boss cylinders found from their walls (raw scans)
+  /// Rounds that were a thin sheet's square edges: tori dropped, cylinders
+  /// made end faces (raw scans; primitives/sheet_rounds.h).
+  std::size_t sheetEdges = 0;
   /// Points the labels, the optimisation and the repair worked on: all of
   /// the scan's, or, for a scan larger than the detection's search
   /// (DetectOptions::ransacPoints), the even subsample detection searched

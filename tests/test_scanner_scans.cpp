@@ -39,13 +39,6 @@ const std::vector<KnownGap> kKnownGaps = {
      "flat's points inside the disc; detection fits its sparse wall with 22 inliers in 3 of "
      "12 sectors, so the bore opening leaves it to the winding number) and the radial "
      "set-screw hole (2 voxels across); 1587 and 568 of the 2488 false inside voxels"},
-    {"sheet_bracket", 0.95,
-     "IoU 0.969, 9 primitives for 5: the holes' radii come out 0.5 mm too large, each with a "
-     "torus along its rim, and a thin cylinder along each end of the wall (blended normals "
-     "at the 1.5 mm sheet's edges); the 20 x 5 mm window through the wall is cut since it is "
-     "found from its rims (0.948 with 14 primitives when it was filled, 2.6 % of the volume; "
-     "0.540 when 22 % of the sheet's normals pointed into the solid, before the orientation "
-     "kept a thin wall's faces apart)"},
 };
 
 const KnownGap* knownGap(const std::string& part) {

@@ -1,0 +1,223 @@
+#include "primitives/sheet_rounds.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/nearest_neighbors.h"
+#include "core/statistics.h"
+
+namespace csgvox {
+
+namespace {
+
+// Two faces are opposite when their normals' dot product is below minus
+// this (about 11 degrees), and a round's axis is along (or across) their
+// normal within the same angle.
+constexpr double kParallel = 0.98;
+// A face's points along the round, at least (count).
+constexpr std::size_t kMinEvidence = 8;
+// Points of a face whose spacing is measured, about.
+constexpr std::size_t kSpacingSamples = 2000;
+
+// Two opposite faces of a sheet: `normal` and `offset` are the first's; the
+// second lies at -otherOffset along the same normal (its own normal the
+// opposite way), so the sheet is the slab -otherOffset <= n.x <= offset.
+struct Sheet {
+  std::size_t first, second;
+  Vec3 normal;
+  double offset, otherOffset;
+  double thickness() const { return offset + otherOffset; }
+  double middle() const { return 0.5 * (offset - otherOffset); }
+};
+
+double faceSpacing(const PointCloud& cloud, const Surface& face) {
+  std::vector<Vec3> points;
+  points.reserve(face.inliers.size());
+  for (std::uint32_t i : face.inliers) points.push_back(cloud.points[i]);
+  if (points.size() < 2) return 0.0;
+  return medianNearestDistance(points, NearestNeighbors(points), kSpacingSamples);
+}
+
+// The pairs of opposite faces no more than maxThicknessSpacings spacings of
+// their points apart.
+std::vector<Sheet> thinSheets(const PointCloud& cloud, const DetectionResult& result,
+                              const SheetRoundOptions& options) {
+  std::vector<double> spacing(result.surfaces.size(), -1.0);
+  std::vector<Sheet> sheets;
+  for (std::size_t a = 0; a < result.surfaces.size(); ++a) {
+    const auto* p = result.surfaces[a].as<PlaneSurface>();
+    if (p == nullptr) continue;
+    for (std::size_t b = a + 1; b < result.surfaces.size(); ++b) {
+      const auto* q = result.surfaces[b].as<PlaneSurface>();
+      if (q == nullptr || p->normal.dot(q->normal) > -kParallel) continue;
+      const Sheet sheet{a, b, p->normal, p->offset, q->offset};
+      if (!(sheet.thickness() > 0.0)) continue;
+      for (std::size_t s : {a, b}) {
+        if (spacing[s] < 0.0) spacing[s] = faceSpacing(cloud, result.surfaces[s]);
+      }
+      const double finer = std::min(spacing[a], spacing[b]);
+      if (finer > 0.0 && sheet.thickness() <= options.maxThicknessSpacings * finer) {
+        sheets.push_back(sheet);
+      }
+    }
+  }
+  return sheets;
+}
+
+bool halfThick(double radius, const Sheet& sheet, const SheetRoundOptions& options) {
+  return std::abs(2.0 * radius - sheet.thickness()) <= options.tolerance * sheet.thickness();
+}
+
+// How many of `face`'s points lie within `reach` of the round (`distance`
+// gives a point's distance from its axis or circle).
+template <class Distance>
+std::size_t pointsAlong(const PointCloud& cloud, const Surface& face, double reach,
+                        const Distance& distance) {
+  std::size_t n = 0;
+  for (std::uint32_t i : face.inliers) n += distance(cloud.points[i]) <= reach ? 1 : 0;
+  return n;
+}
+
+}  // namespace
+
+SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& result,
+                                   const SheetRoundOptions& options) {
+  SheetRoundStats stats;
+  const bool anyRound =
+      std::any_of(result.surfaces.begin(), result.surfaces.end(), [](const Surface& s) {
+        return s.convex && (s.as<TorusSurface>() != nullptr || s.as<CylinderSurface>() != nullptr);
+      });
+  if (!anyRound) return stats;
+  const std::vector<Sheet> sheets = thinSheets(cloud, result, options);
+  if (sheets.empty()) return stats;
+  const double eps = result.epsilon;
+  const std::size_t found = result.surfaces.size();
+  std::vector<char> drop(found, 0);
+  std::vector<Surface> added;
+  for (std::size_t s = 0; s < found; ++s) {
+    Surface& round = result.surfaces[s];
+    if (!round.convex) continue;
+    for (const Sheet& sheet : sheets) {
+      const Vec3& n = sheet.normal;
+      const double band = options.tolerance * sheet.thickness();
+      const Surface& first = result.surfaces[sheet.first];
+      const Surface& second = result.surfaces[sheet.second];
+      if (const auto* t = round.as<TorusSurface>()) {
+        if (std::abs(t->axisDir.dot(n)) < kParallel || !halfThick(t->minorRadius, sheet, options) ||
+            std::abs(t->center.dot(n) - sheet.middle()) > band) {
+          continue;
+        }
+        const auto fromCircle = [&](const Vec3& p) {
+          const Vec3 d = p - t->center;
+          const double along = d.dot(t->axisDir);
+          const double rho = (d - along * t->axisDir).norm();
+          return std::hypot(rho - t->majorRadius, along);
+        };
+        const double reach = t->minorRadius + 2.0 * eps;
+        if (pointsAlong(cloud, first, reach, fromCircle) < kMinEvidence ||
+            pointsAlong(cloud, second, reach, fromCircle) < kMinEvidence) {
+          continue;
+        }
+        drop[s] = 1;
+        ++stats.tori;
+        break;
+      }
+      const auto* c = round.as<CylinderSurface>();
+      if (c == nullptr || std::abs(c->axisDir.dot(n)) > 1.0 - kParallel ||
+          !halfThick(c->radius, sheet, options) ||
+          std::abs(c->axisPoint.dot(n) - sheet.middle()) > band) {
+        continue;
+      }
+      const auto fromAxis = [&](const Vec3& p) {
+        const Vec3 d = p - c->axisPoint;
+        return (d - d.dot(c->axisDir) * c->axisDir).norm();
+      };
+      const double reach = c->radius + 2.0 * eps;
+      if (pointsAlong(cloud, first, reach, fromAxis) < kMinEvidence ||
+          pointsAlong(cloud, second, reach, fromAxis) < kMinEvidence) {
+        continue;
+      }
+      // The end face looks away from the sheet: from the axis away from the
+      // faces' points along it.
+      Vec3 m = c->axisDir.cross(n).normalized();
+      double side = 0.0;
+      for (const Surface* face : {&first, &second}) {
+        for (std::uint32_t i : face->inliers) {
+          if (fromAxis(cloud.points[i]) <= reach) side += (cloud.points[i] - c->axisPoint).dot(m);
+        }
+      }
+      if (side > 0.0) m = -m;
+      // Its points are the outermost of the cylinder's: the end face's own,
+      // or the faces' last ones before the edge.
+      std::vector<double> outer;
+      std::vector<std::uint32_t> kept;
+      for (std::uint32_t i : round.inliers) {
+        const double q = (cloud.points[i] - c->axisPoint).dot(m);
+        if (q <= 0.0 || result.assignment[i] != int(s)) continue;
+        outer.push_back(q);
+        kept.push_back(i);
+      }
+      if (outer.size() < kMinEvidence) continue;
+      std::vector<double> top = outer;
+      std::nth_element(top.begin(), top.begin() + (kMinEvidence - 1), top.end(), std::greater<>());
+      top.resize(kMinEvidence);
+      const double end = median(std::move(top));
+      const double offset = c->axisPoint.dot(m) + end;
+      // The face holds the points at it (its fit and the regularisation
+      // place it at their mean).
+      const double near = 2.0 * std::max(result.noise, 1e-9 * result.diagonal);
+      std::size_t k = 0;
+      for (std::size_t j = 0; j < outer.size(); ++j) {
+        if (std::abs(outer[j] - end) <= near) kept[k++] = kept[j];
+      }
+      kept.resize(k);
+      drop[s] = 1;
+      ++stats.cylinders;
+      const bool there =
+          std::any_of(result.surfaces.begin(), result.surfaces.end(), [&](const Surface& other) {
+            const auto* p = other.as<PlaneSurface>();
+            return p != nullptr && p->normal.dot(m) > kParallel &&
+                   std::abs(p->offset - offset) <= 2.0 * eps;
+          });
+      if (!there && kept.size() >= kMinEvidence / 2) {
+        Surface face;
+        face.shape = PlaneSurface{m, offset};
+        face.rms = std::max(result.noise, 1e-9 * result.diagonal);
+        face.inliers = std::move(kept);
+        added.push_back(std::move(face));
+      }
+      break;
+    }
+  }
+  if (stats.tori + stats.cylinders == 0) return stats;
+  // Renumber: the kept surfaces in their order, then the end faces.
+  const bool withCentroids = result.centroids.size() == found;
+  std::vector<int> index(found, -1);
+  std::vector<Surface> surfaces;
+  std::vector<Vec3> centroids;
+  for (std::size_t s = 0; s < found; ++s) {
+    if (drop[s]) continue;
+    index[s] = int(surfaces.size());
+    surfaces.push_back(std::move(result.surfaces[s]));
+    if (withCentroids) centroids.push_back(result.centroids[s]);
+  }
+  for (int& a : result.assignment) a = a >= 0 ? index[std::size_t(a)] : -1;
+  for (Surface& face : added) {
+    const int k = int(surfaces.size());
+    Vec3 sum = Vec3::Zero();
+    for (std::uint32_t i : face.inliers) {
+      sum += cloud.points[i];
+      result.assignment[i] = k;
+    }
+    if (withCentroids) centroids.push_back(sum / double(face.inliers.size()));
+    surfaces.push_back(std::move(face));
+  }
+  result.surfaces = std::move(surfaces);
+  if (withCentroids) result.centroids = std::move(centroids);
+  return stats;
+}
+
+}  // namespace csgvox
