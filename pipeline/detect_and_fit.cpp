@@ -156,7 +156,8 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   }
   if (options.sheetRounds && options.detect.estimatedNormals) {
     out.sheetRounds = replaceSheetRounds(scan, out.detection, options.sheetRoundOptions);
-    const std::size_t edges = out.sheetRounds.tori + out.sheetRounds.cylinders;
+    const std::size_t edges =
+        out.sheetRounds.tori + out.sheetRounds.cylinders + out.sheetRounds.corners;
     if (edges > 0) {
       out.detection.message += "; " + std::to_string(edges) + " round" + (edges == 1 ? "" : "s") +
                                " taken for a thin sheet's square edge";

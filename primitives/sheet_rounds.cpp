@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "core/nearest_neighbors.h"
@@ -79,6 +80,68 @@ std::size_t pointsAlong(const PointCloud& cloud, const Surface& face, double rea
   std::size_t n = 0;
   for (std::uint32_t i : face.inliers) n += distance(cloud.points[i]) <= reach ? 1 : 0;
   return n;
+}
+
+// True when the cylinder is the blend of the square corner where two thin
+// sheets meet at a right angle (an L, a tray's floor and wall): its axis
+// along their common edge and inside both slabs, its radius from 15 % of the
+// thinner's thickness to 135 % of the thicker's, and points of the scan at the corner's outer line
+// itself, within max(3 noise deviations, a quarter of the radius) of it
+// along the cylinder's points' span (a real round leaves that line (sqrt 2 -
+// 1) times its radius away).
+bool inSheetCorner(const PointCloud& cloud, const DetectionResult& result, const Surface& round,
+                   const std::vector<Sheet>& sheets, const SheetRoundOptions& options) {
+  const auto* c = round.as<CylinderSurface>();
+  const Vec3& p = c->axisPoint;
+  const Vec3& d = c->axisDir;
+  const double tol = options.tolerance;
+  const auto across = [&](const Vec3& v) { return (v - v.dot(d) * d).norm(); };
+  for (std::size_t a = 0; a < sheets.size(); ++a) {
+    for (std::size_t b = a + 1; b < sheets.size(); ++b) {
+      const Sheet& A = sheets[a];
+      const Sheet& B = sheets[b];
+      if (std::abs(A.normal.dot(B.normal)) > 1.0 - kParallel ||
+          std::abs(d.dot(A.normal)) > 1.0 - kParallel ||
+          std::abs(d.dot(B.normal)) > 1.0 - kParallel) {
+        continue;
+      }
+      const double ta = A.thickness(), tb = B.thickness();
+      if (std::abs(A.normal.dot(p) - A.middle()) > 0.5 * ta ||
+          std::abs(B.normal.dot(p) - B.middle()) > 0.5 * tb ||
+          c->radius > (1.0 + tol) * std::max(ta, tb) ||
+          c->radius < (0.5 - tol) * std::min(ta, tb)) {
+        continue;
+      }
+      // Each sheet's outer face is the one away from the other's body.
+      const double reach = c->radius + 2.0 * std::max(ta, tb);
+      const auto outerHeight = [&](const Sheet& s, const Sheet& other) {
+        double side = 0.0;
+        for (std::size_t f : {other.first, other.second}) {
+          for (std::uint32_t i : result.surfaces[f].inliers) {
+            const Vec3 v = cloud.points[i] - p;
+            if (across(v) <= reach) side += v.dot(s.normal);
+          }
+        }
+        return side > 0.0 ? -s.otherOffset : s.offset;
+      };
+      const Vec3 corner = p + (outerHeight(A, B) - A.normal.dot(p)) * A.normal +
+                          (outerHeight(B, A) - B.normal.dot(p)) * B.normal;
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (std::uint32_t i : round.inliers) {
+        const double t = (cloud.points[i] - p).dot(d);
+        lo = std::min(lo, t), hi = std::max(hi, t);
+      }
+      const double near = std::max(3.0 * result.noise, 0.25 * c->radius);
+      std::size_t atCorner = 0;
+      for (const Vec3& q : cloud.points) {
+        const Vec3 v = q - corner;
+        const double t = (q - p).dot(d);
+        if (t >= lo && t <= hi && across(v) <= near) ++atCorner;
+      }
+      if (atCorner >= kMinEvidence) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -191,8 +254,13 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
       }
       break;
     }
+    if (!drop[s] && round.as<CylinderSurface>() != nullptr &&
+        inSheetCorner(cloud, result, round, sheets, options)) {
+      drop[s] = 1;
+      ++stats.corners;
+    }
   }
-  if (stats.tori + stats.cylinders == 0) return stats;
+  if (stats.tori + stats.cylinders + stats.corners == 0) return stats;
   // Renumber: the kept surfaces in their order, then the end faces.
   const bool withCentroids = result.centroids.size() == found;
   std::vector<int> index(found, -1);

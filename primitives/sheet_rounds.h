@@ -8,6 +8,9 @@
 /// their mid-plane and of half their distance in radius, is the sheet's edge:
 /// a torus is dropped (the hole it hid is then found from its rims), a
 /// cylinder becomes the end face, placed where its outermost points are.
+/// Where two such sheets meet at a right angle, the blended corner reads as
+/// a convex cylinder of about the thickness in radius; it is dropped when
+/// the scan's points reach the square corner's outer line.
 
 #include <cstddef>
 
@@ -32,6 +35,7 @@ struct SheetRoundOptions {
 struct SheetRoundStats {
   std::size_t tori = 0;       ///< tori along a hole's rim dropped
   std::size_t cylinders = 0;  ///< cylinders along a free edge made end faces
+  std::size_t corners = 0;    ///< cylinders in the corner of two sheets dropped
 };
 
 /// Drops each convex torus of `result` that is a thin sheet's hole rim
@@ -42,7 +46,11 @@ struct SheetRoundStats {
 /// both faces' points along it) by the end face: a plane across the sheet
 /// facing away from it, at the median of the cylinder's 8 outermost points
 /// (the end face's own, or the faces' last before the edge), or by nothing
-/// when such a plane is there already. The end face holds the cylinder's
+/// when such a plane is there already. Drops each convex cylinder in the
+/// square corner of two thin sheets at a right angle (axis along their
+/// common edge, inside both slabs, radius from 15 % of the thinner's
+/// thickness to 135 % of the thicker's, at least 8 of the scan's points on
+/// the corner's outer line along its span). The end face holds the cylinder's
 /// points within two noise deviations of it; the other points of a dropped
 /// surface are unassigned. For estimated normals only (a scanner's own, or
 /// exact ones, tell a round from an edge). `result` must be the output of

@@ -190,6 +190,68 @@ TEST(SheetRounds, AnEdgeCylinderWhoseEndFaceWasFoundIsDroppedAndOneOfAnotherRadi
   EXPECT_EQ(wide.count(SurfaceType::Cylinder), 1u);
 }
 
+// An L of two 1 thick sheets: a floor z in [0, 1] for y < 20 and a wall y in
+// [19, 20] for z > 0, each face a plane whose points stop 0.3 short of the
+// corner's blended strip, and a convex cylinder of radius 0.9 along x in the
+// corner (as detection fits the strip). With `square`, the scan also holds
+// points along the outer corner line (y 20, z 0); without, the corner is a
+// real round of radius 1 about (19, 1), whose points are its arc.
+struct Corner {
+  PointCloud cloud;
+  DetectionResult result;
+  std::mt19937 rng{5};
+
+  explicit Corner(bool square) {
+    std::uniform_real_distribution<double> x(-15.0, 15.0), u(0.0, 1.0);
+    const auto face = [&](const Vec3& normal, double offset, const std::function<Vec3()>& at) {
+      Surface f;
+      f.shape = PlaneSurface{normal, offset};
+      for (int k = 0; k < 3000; ++k) add(f, at(), normal);
+      result.surfaces.push_back(std::move(f));
+    };
+    face(-Vec3::UnitZ(), 0.0, [&] { return Vec3(x(rng), -10.0 + 29.0 * u(rng), 0.0); });
+    face(Vec3::UnitZ(), 1.0, [&] { return Vec3(x(rng), -10.0 + 28.7 * u(rng), 1.0); });
+    face(Vec3::UnitY(), 20.0, [&] { return Vec3(x(rng), 20.0, 1.0 + 19.0 * u(rng)); });
+    face(-Vec3::UnitY(), -19.0, [&] { return Vec3(x(rng), 19.0, 1.3 + 18.7 * u(rng)); });
+    Surface round;
+    round.shape = CylinderSurface{Vec3(0, 19.3, 0.7), Vec3::UnitX(), 0.9};
+    for (int k = 0; k < 300; ++k) {
+      const double a = 0.5 * std::numbers::pi * u(rng);
+      // The strip: on the outer faces up to the corner, or on the arc.
+      const Vec3 q =
+          square ? (k % 2 == 0 ? Vec3(x(rng), 19.0 + u(rng), 0.0) : Vec3(x(rng), 20.0, u(rng)))
+                 : Vec3(x(rng), 19.0 + std::sin(a), 1.0 - std::cos(a));
+      add(round, q, Vec3(0, std::sin(a), -std::cos(a)));
+    }
+    result.surfaces.push_back(std::move(round));
+    result.status = DetectionResult::Status::Ok;
+    result.diagonal = cloud.diagonal();
+    result.noise = 0.01;
+    result.epsilon = 0.1;
+    result.centroids.assign(result.surfaces.size(), Vec3::Zero());
+  }
+
+  void add(Surface& s, const Vec3& p, const Vec3& normal) {
+    s.inliers.push_back(std::uint32_t(cloud.size()));
+    result.assignment.push_back(int(result.surfaces.size()));
+    cloud.points.push_back(p);
+    cloud.normals.push_back(normal);
+  }
+};
+
+TEST(SheetRounds, ACylinderInTheSquareCornerOfTwoThinSheetsIsDroppedAndARealRoundStays) {
+  Corner square(true);
+  const SheetRoundStats stats = replaceSheetRounds(square.cloud, square.result);
+  EXPECT_EQ(stats.corners, 1u);
+  EXPECT_EQ(stats.cylinders, 0u);
+  ASSERT_EQ(square.result.surfaces.size(), 4u);
+  for (const Surface& s : square.result.surfaces) EXPECT_NE(s.as<PlaneSurface>(), nullptr);
+  // A round of radius 1 leaves the corner line 0.41 away: it stays.
+  Corner round(false);
+  EXPECT_EQ(replaceSheetRounds(round.cloud, round.result).corners, 0u);
+  EXPECT_EQ(round.result.surfaces.size(), 5u);
+}
+
 TEST(SheetRounds, TheMainJobGivesTheSheetBracketsHolesTheirRadiusFromItsScannerScan) {
   // The bundled sheet bracket's scanner scan (raw x y z): a 1.5 thick sheet,
   // about three point spacings. Detection fits each hole's rim as a torus
@@ -228,6 +290,33 @@ TEST(SheetRounds, TheMainJobGivesTheSheetBracketsHolesTheirRadiusFromItsScannerS
               iouWith, with.tree.primitiveCount(), iouWithout, without.tree.primitiveCount());
   EXPECT_GT(iouWith, iouWithout + 0.005);  // measured 0.979 against 0.969
   EXPECT_GE(iouWith, 0.975);
+}
+
+TEST(SheetRounds, TheMainJobBuildsTheThinTrayFromItsTwoBoxesFromItsScannerScan) {
+  // The bundled thin tray (a box less a box: 1 thick floor and walls), its
+  // scanner scan read on seed 2: detection fits the blended strips along the
+  // corners of the floor and the walls as convex cylinders of radius 0.9,
+  // and the tree added them inside the pocket (6 primitives for 2).
+  const std::filesystem::path dir = test::dataDir() / "thin" / "thin_tray";
+  const Scan scan = readScan(dir / "scan_scanner.ply");
+  ASSERT_TRUE(scan.info.normalsEstimated);
+  const CsgTree truth = readTreeJson(dir / "tree.json");
+  ReconstructOptions options;
+  options.seed = 2;
+  options.detect.estimatedNormals = true;
+  const Reconstruction with = reconstruct(scan.cloud, options);
+  ASSERT_TRUE(with.ok()) << with.message;
+  options.sheetRounds = false;
+  const Reconstruction without = reconstruct(scan.cloud, options);
+  ASSERT_TRUE(without.ok()) << without.message;
+  const double iouWith = test::treeIou(with.tree, truth);
+  const double iouWithout = test::treeIou(without.tree, truth);
+  std::printf("thin_tray scanner, seed 2: IoU %.4f (%zu primitives) with, %.4f (%zu) without\n",
+              iouWith, with.tree.primitiveCount(), iouWithout, without.tree.primitiveCount());
+  EXPECT_GE(with.sheetEdges, 2u);
+  EXPECT_EQ(with.tree.primitiveCount(), truth.primitiveCount());  // measured 2, 6 without
+  EXPECT_GT(without.tree.primitiveCount(), truth.primitiveCount() + 2);
+  EXPECT_GE(iouWith, iouWithout);
 }
 
 }  // namespace
