@@ -72,14 +72,40 @@ bool halfThick(double radius, const Sheet& sheet, const SheetRoundOptions& optio
   return std::abs(2.0 * radius - sheet.thickness()) <= options.tolerance * sheet.thickness();
 }
 
-// How many of `face`'s points lie within `reach` of the round (`distance`
-// gives a point's distance from its axis or circle).
+// True when each of the sheet's faces holds kMinEvidence points within
+// `reach` of the round (`distance` gives a point's distance from its axis or
+// circle).
 template <class Distance>
-std::size_t pointsAlong(const PointCloud& cloud, const Surface& face, double reach,
-                        const Distance& distance) {
-  std::size_t n = 0;
-  for (std::uint32_t i : face.inliers) n += distance(cloud.points[i]) <= reach ? 1 : 0;
-  return n;
+bool bothFacesAlong(const PointCloud& cloud, const DetectionResult& result, const Sheet& sheet,
+                    double reach, const Distance& distance) {
+  for (std::size_t f : {sheet.first, sheet.second}) {
+    std::size_t n = 0;
+    for (std::uint32_t i : result.surfaces[f].inliers) {
+      n += distance(cloud.points[i]) <= reach ? 1 : 0;
+    }
+    if (n < kMinEvidence) return false;
+  }
+  return true;
+}
+
+// Distance of p from the cylinder's axis line.
+double fromAxis(const CylinderSurface& c, const Vec3& p) {
+  const Vec3 v = p - c.axisPoint;
+  return (v - v.dot(c.axisDir) * c.axisDir).norm();
+}
+
+// Which way along `dir` the sheet's faces' points within `reach` of the
+// cylinder's axis lie from it: the sum of their offsets.
+double sideOf(const PointCloud& cloud, const DetectionResult& result, const Sheet& sheet,
+              const CylinderSurface& c, double reach, const Vec3& dir) {
+  double side = 0.0;
+  for (std::size_t f : {sheet.first, sheet.second}) {
+    for (std::uint32_t i : result.surfaces[f].inliers) {
+      const Vec3& q = cloud.points[i];
+      if (fromAxis(c, q) <= reach) side += (q - c.axisPoint).dot(dir);
+    }
+  }
+  return side;
 }
 
 // True when the cylinder is the blend of the square corner where two thin
@@ -95,7 +121,6 @@ bool inSheetCorner(const PointCloud& cloud, const DetectionResult& result, const
   const Vec3& p = c->axisPoint;
   const Vec3& d = c->axisDir;
   const double tol = options.tolerance;
-  const auto across = [&](const Vec3& v) { return (v - v.dot(d) * d).norm(); };
   for (std::size_t a = 0; a < sheets.size(); ++a) {
     for (std::size_t b = a + 1; b < sheets.size(); ++b) {
       const Sheet& A = sheets[a];
@@ -115,14 +140,7 @@ bool inSheetCorner(const PointCloud& cloud, const DetectionResult& result, const
       // Each sheet's outer face is the one away from the other's body.
       const double reach = c->radius + 2.0 * std::max(ta, tb);
       const auto outerHeight = [&](const Sheet& s, const Sheet& other) {
-        double side = 0.0;
-        for (std::size_t f : {other.first, other.second}) {
-          for (std::uint32_t i : result.surfaces[f].inliers) {
-            const Vec3 v = cloud.points[i] - p;
-            if (across(v) <= reach) side += v.dot(s.normal);
-          }
-        }
-        return side > 0.0 ? -s.otherOffset : s.offset;
+        return sideOf(cloud, result, other, *c, reach, s.normal) > 0.0 ? -s.otherOffset : s.offset;
       };
       const Vec3 corner = p + (outerHeight(A, B) - A.normal.dot(p)) * A.normal +
                           (outerHeight(B, A) - B.normal.dot(p)) * B.normal;
@@ -133,10 +151,10 @@ bool inSheetCorner(const PointCloud& cloud, const DetectionResult& result, const
       }
       const double near = std::max(3.0 * result.noise, 0.25 * c->radius);
       std::size_t atCorner = 0;
+      const CylinderSurface line{corner, d, 0.0};
       for (const Vec3& q : cloud.points) {
-        const Vec3 v = q - corner;
         const double t = (q - p).dot(d);
-        if (t >= lo && t <= hi && across(v) <= near) ++atCorner;
+        if (t >= lo && t <= hi && fromAxis(line, q) <= near) ++atCorner;
       }
       if (atCorner >= kMinEvidence) return true;
     }
@@ -157,6 +175,7 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
   const std::vector<Sheet> sheets = thinSheets(cloud, result, options);
   if (sheets.empty()) return stats;
   const double eps = result.epsilon;
+  const double noise = std::max(result.noise, 1e-9 * result.diagonal);
   const std::size_t found = result.surfaces.size();
   std::vector<char> drop(found, 0);
   std::vector<Surface> added;
@@ -166,8 +185,6 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
     for (const Sheet& sheet : sheets) {
       const Vec3& n = sheet.normal;
       const double band = options.tolerance * sheet.thickness();
-      const Surface& first = result.surfaces[sheet.first];
-      const Surface& second = result.surfaces[sheet.second];
       if (const auto* t = round.as<TorusSurface>()) {
         if (std::abs(t->axisDir.dot(n)) < kParallel || !halfThick(t->minorRadius, sheet, options) ||
             std::abs(t->center.dot(n) - sheet.middle()) > band) {
@@ -179,11 +196,7 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
           const double rho = (d - along * t->axisDir).norm();
           return std::hypot(rho - t->majorRadius, along);
         };
-        const double reach = t->minorRadius + 2.0 * eps;
-        if (pointsAlong(cloud, first, reach, fromCircle) < kMinEvidence ||
-            pointsAlong(cloud, second, reach, fromCircle) < kMinEvidence) {
-          continue;
-        }
+        if (!bothFacesAlong(cloud, result, sheet, t->minorRadius + 2.0 * eps, fromCircle)) continue;
         drop[s] = 1;
         ++stats.tori;
         break;
@@ -194,25 +207,13 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
           std::abs(c->axisPoint.dot(n) - sheet.middle()) > band) {
         continue;
       }
-      const auto fromAxis = [&](const Vec3& p) {
-        const Vec3 d = p - c->axisPoint;
-        return (d - d.dot(c->axisDir) * c->axisDir).norm();
-      };
       const double reach = c->radius + 2.0 * eps;
-      if (pointsAlong(cloud, first, reach, fromAxis) < kMinEvidence ||
-          pointsAlong(cloud, second, reach, fromAxis) < kMinEvidence) {
-        continue;
-      }
+      const auto distance = [&](const Vec3& q) { return fromAxis(*c, q); };
+      if (!bothFacesAlong(cloud, result, sheet, reach, distance)) continue;
       // The end face looks away from the sheet: from the axis away from the
       // faces' points along it.
       Vec3 m = c->axisDir.cross(n).normalized();
-      double side = 0.0;
-      for (const Surface* face : {&first, &second}) {
-        for (std::uint32_t i : face->inliers) {
-          if (fromAxis(cloud.points[i]) <= reach) side += (cloud.points[i] - c->axisPoint).dot(m);
-        }
-      }
-      if (side > 0.0) m = -m;
+      if (sideOf(cloud, result, sheet, *c, reach, m) > 0.0) m = -m;
       // Its points are the outermost of the cylinder's: the end face's own,
       // or the faces' last ones before the edge.
       std::vector<double> outer;
@@ -231,7 +232,7 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
       const double offset = c->axisPoint.dot(m) + end;
       // The face holds the points at it (its fit and the regularisation
       // place it at their mean).
-      const double near = 2.0 * std::max(result.noise, 1e-9 * result.diagonal);
+      const double near = 2.0 * noise;
       std::size_t k = 0;
       for (std::size_t j = 0; j < outer.size(); ++j) {
         if (std::abs(outer[j] - end) <= near) kept[k++] = kept[j];
@@ -248,7 +249,7 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
       if (!there && kept.size() >= kMinEvidence / 2) {
         Surface face;
         face.shape = PlaneSurface{m, offset};
-        face.rms = std::max(result.noise, 1e-9 * result.diagonal);
+        face.rms = noise;
         face.inliers = std::move(kept);
         added.push_back(std::move(face));
       }

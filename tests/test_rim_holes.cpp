@@ -15,6 +15,7 @@
 
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
+#include "main_job_pair.h"
 #include "part_list.h"
 #include "pipeline/detect_and_fit.h"
 #include "pipeline/reconstruct.h"
@@ -720,17 +721,13 @@ TEST(RimHoles, TheMainJobCutsTheWindowOfTheSheetBracketFromItsRimsInItsScannerSc
   // Both faces of the wall show it as a rectangular gap: its sides become
   // planes, the hypotheses a box, and the tree cuts it.
   const std::filesystem::path dir = test::dataDir() / "thin" / "sheet_bracket";
-  const Scan scan = readScan(dir / "scan_scanner.ply");
-  ASSERT_TRUE(scan.info.normalsEstimated);
-  const CsgTree truth = readTreeJson(dir / "tree.json");
-  ReconstructOptions options;
-  options.detect.estimatedNormals = true;
-  const Reconstruction with = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(with.ok()) << with.message;
+  const test::MainJobPair run =
+      test::mainJobWithAndWithout(dir / "scan_scanner.ply", dir / "tree.json", 1,
+                                  [](ReconstructOptions& o) { o.rims.windows = false; });
+  ASSERT_TRUE(run.with.ok() && run.without.ok());
+  const Reconstruction& with = run.with;
+  const Reconstruction& without = run.without;
   EXPECT_EQ(with.rimWindows, 1u);
-  options.rims.windows = false;
-  const Reconstruction without = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(without.ok()) << without.message;
   EXPECT_EQ(without.rimWindows, 0u);
   // The window's inside (x in [-10, 10], z in [15, 20], through the wall at
   // y in [-20, -18.5]), a millimetre in from its sides.
@@ -746,8 +743,7 @@ TEST(RimHoles, TheMainJobCutsTheWindowOfTheSheetBracketFromItsRimsInItsScannerSc
     }
     return double(in) / all;
   };
-  const double iouWith = test::treeIou(with.tree, truth);
-  const double iouWithout = test::treeIou(without.tree, truth);
+  const double iouWith = run.iouWith, iouWithout = run.iouWithout;
   std::printf(
       "sheet_bracket scanner: window filled %.3f with windows, %.3f without; IoU %.4f, %.4f\n",
       filled(with.tree), filled(without.tree), iouWith, iouWithout);
@@ -764,25 +760,16 @@ TEST(RimHoles, TheMainJobCutsTheSlotsOfASheetFromTheirRimsInItsScannerScan) {
   // 0.939); with them two more, whose ends lie where their own few points
   // show (the faces' gaps reach 0.6 past them).
   const std::filesystem::path dir = test::dataDir() / "regressions";
-  const Scan scan = readScan(dir / "slotted-sheet-scanner.ply");
-  ASSERT_TRUE(scan.info.normalsEstimated);
-  const CsgTree truth = readTreeJson(dir / "slotted-sheet-tree.json");
-  ReconstructOptions options;
-  options.seed = 2;
-  options.detect.estimatedNormals = true;
-  const Reconstruction with = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(with.ok()) << with.message;
-  options.rims.windows = false;
-  const Reconstruction without = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(without.ok()) << without.message;
-  const double iouWith = test::treeIou(with.tree, truth);
-  const double iouWithout = test::treeIou(without.tree, truth);
-  std::printf("slotted sheet, scanner scan: IoU %.4f with %zu windows, %.4f without\n", iouWith,
-              with.rimWindows, iouWithout);
-  EXPECT_GE(with.rimWindows, 2u);
-  EXPECT_GE(iouWith, 0.96);  // measured 0.968
-  EXPECT_GT(iouWith, iouWithout + 0.02);
-  EXPECT_LE(with.tree.primitiveCount(), truth.primitiveCount());
+  const test::MainJobPair run = test::mainJobWithAndWithout(
+      dir / "slotted-sheet-scanner.ply", dir / "slotted-sheet-tree.json", 2,
+      [](ReconstructOptions& o) { o.rims.windows = false; });
+  ASSERT_TRUE(run.with.ok() && run.without.ok());
+  std::printf("slotted sheet, scanner scan: IoU %.4f with %zu windows, %.4f without\n", run.iouWith,
+              run.with.rimWindows, run.iouWithout);
+  EXPECT_GE(run.with.rimWindows, 2u);
+  EXPECT_GE(run.iouWith, 0.96);  // measured 0.968
+  EXPECT_GT(run.iouWith, run.iouWithout + 0.02);
+  EXPECT_LE(run.with.tree.primitiveCount(), run.truth.primitiveCount());
 }
 
 TEST(RimHoles, TheMainJobCutsTheSmallHolesOfInverseCsgPart159FromItsScannerScan) {

@@ -12,8 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "io/scan_reader.h"
-#include "io/tree_json.h"
+#include "main_job_pair.h"
 #include "part_list.h"
 #include "pipeline/reconstruct.h"
 #include "primitives/sheet_rounds.h"
@@ -252,24 +251,24 @@ TEST(SheetRounds, ACylinderInTheSquareCornerOfTwoThinSheetsIsDroppedAndARealRoun
   EXPECT_EQ(round.result.surfaces.size(), 5u);
 }
 
+void offSheetRounds(ReconstructOptions& options) { options.sheetRounds = false; }
+
+void print(const char* what, const test::MainJobPair& run) {
+  std::printf("%s: IoU %.4f (%zu primitives) with, %.4f (%zu) without\n", what, run.iouWith,
+              run.with.tree.primitiveCount(), run.iouWithout, run.without.tree.primitiveCount());
+}
+
 TEST(SheetRounds, TheMainJobGivesTheSheetBracketsHolesTheirRadiusFromItsScannerScan) {
   // The bundled sheet bracket's scanner scan (raw x y z): a 1.5 thick sheet,
   // about three point spacings. Detection fits each hole's rim as a torus
   // of minor radius 0.75 and each free edge as a cylinder of radius 0.75;
   // the tree's holes came out of radius 5.54 (the tori's), its ends short.
   const std::filesystem::path dir = test::dataDir() / "thin" / "sheet_bracket";
-  const Scan scan = readScan(dir / "scan_scanner.ply");
-  ASSERT_TRUE(scan.info.normalsEstimated);
-  const CsgTree truth = readTreeJson(dir / "tree.json");
-  ReconstructOptions options;
-  options.detect.estimatedNormals = true;
-  const Reconstruction with = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(with.ok()) << with.message;
-  options.sheetRounds = false;
-  const Reconstruction without = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(without.ok()) << without.message;
-  EXPECT_GE(with.sheetEdges, 2u);
-  EXPECT_EQ(without.sheetEdges, 0u);
+  const test::MainJobPair run =
+      test::mainJobWithAndWithout(dir / "scan_scanner.ply", dir / "tree.json", 1, offSheetRounds);
+  ASSERT_TRUE(run.with.ok() && run.without.ok());
+  EXPECT_GE(run.with.sheetEdges, 2u);
+  EXPECT_EQ(run.without.sheetEdges, 0u);
   // The holes: the tree's cylinders along z of radius 4-7.
   const auto holeRadii = [](const CsgTree& tree) {
     std::vector<double> radii;
@@ -281,15 +280,12 @@ TEST(SheetRounds, TheMainJobGivesTheSheetBracketsHolesTheirRadiusFromItsScannerS
     }
     return radii;
   };
-  const std::vector<double> radii = holeRadii(with.tree);
+  const std::vector<double> radii = holeRadii(run.with.tree);
   ASSERT_EQ(radii.size(), 2u);
   for (double r : radii) EXPECT_NEAR(r, 5.0, 0.15);
-  const double iouWith = test::treeIou(with.tree, truth);
-  const double iouWithout = test::treeIou(without.tree, truth);
-  std::printf("sheet_bracket scanner: IoU %.4f (%zu primitives) with, %.4f (%zu) without\n",
-              iouWith, with.tree.primitiveCount(), iouWithout, without.tree.primitiveCount());
-  EXPECT_GT(iouWith, iouWithout + 0.005);  // measured 0.979 against 0.969
-  EXPECT_GE(iouWith, 0.975);
+  print("sheet_bracket scanner", run);
+  EXPECT_GT(run.iouWith, run.iouWithout + 0.005);  // measured 0.979 against 0.969
+  EXPECT_GE(run.iouWith, 0.975);
 }
 
 TEST(SheetRounds, TheMainJobBuildsTheThinTrayFromItsTwoBoxesFromItsScannerScan) {
@@ -298,25 +294,15 @@ TEST(SheetRounds, TheMainJobBuildsTheThinTrayFromItsTwoBoxesFromItsScannerScan) 
   // corners of the floor and the walls as convex cylinders of radius 0.9,
   // and the tree added them inside the pocket (6 primitives for 2).
   const std::filesystem::path dir = test::dataDir() / "thin" / "thin_tray";
-  const Scan scan = readScan(dir / "scan_scanner.ply");
-  ASSERT_TRUE(scan.info.normalsEstimated);
-  const CsgTree truth = readTreeJson(dir / "tree.json");
-  ReconstructOptions options;
-  options.seed = 2;
-  options.detect.estimatedNormals = true;
-  const Reconstruction with = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(with.ok()) << with.message;
-  options.sheetRounds = false;
-  const Reconstruction without = reconstruct(scan.cloud, options);
-  ASSERT_TRUE(without.ok()) << without.message;
-  const double iouWith = test::treeIou(with.tree, truth);
-  const double iouWithout = test::treeIou(without.tree, truth);
-  std::printf("thin_tray scanner, seed 2: IoU %.4f (%zu primitives) with, %.4f (%zu) without\n",
-              iouWith, with.tree.primitiveCount(), iouWithout, without.tree.primitiveCount());
-  EXPECT_GE(with.sheetEdges, 2u);
-  EXPECT_EQ(with.tree.primitiveCount(), truth.primitiveCount());  // measured 2, 6 without
-  EXPECT_GT(without.tree.primitiveCount(), truth.primitiveCount() + 2);
-  EXPECT_GE(iouWith, iouWithout);
+  const test::MainJobPair run =
+      test::mainJobWithAndWithout(dir / "scan_scanner.ply", dir / "tree.json", 2, offSheetRounds);
+  ASSERT_TRUE(run.with.ok() && run.without.ok());
+  print("thin_tray scanner, seed 2", run);
+  EXPECT_GE(run.with.sheetEdges, 2u);
+  const std::size_t truth = run.truth.primitiveCount();
+  EXPECT_EQ(run.with.tree.primitiveCount(), truth);  // measured 2, 6 without
+  EXPECT_GT(run.without.tree.primitiveCount(), truth + 2);
+  EXPECT_GE(run.iouWith, run.iouWithout);
 }
 
 }  // namespace
