@@ -162,6 +162,11 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
       out.detection.message += "; " + std::to_string(edges) + " round" + (edges == 1 ? "" : "s") +
                                " taken for a thin sheet's square edge";
     }
+    if (out.sheetRounds.tilted > 0) {
+      out.detection.message += "; " + std::to_string(out.sheetRounds.tilted) + " tilted plane" +
+                               (out.sheetRounds.tilted == 1 ? "" : "s") +
+                               " taken for a thin sheet's square edge";
+    }
   }
   if (options.rimHoles && options.detect.estimatedNormals) {
     out.rimHoles = addRimHoles(scan, out.detection, options.rimHoleOptions);

@@ -251,7 +251,8 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.thin = std::move(found.thin);
   out.holesFromRims = found.rimHoles.holes;
   out.rimWindows = found.rimHoles.windows;
-  out.sheetEdges = found.sheetRounds.tori + found.sheetRounds.cylinders + found.sheetRounds.corners;
+  out.sheetEdges = found.sheetRounds.tori + found.sheetRounds.cylinders +
+                   found.sheetRounds.corners + found.sheetRounds.tilted;
   out.boresFromWalls = found.wallBores.bores;
   out.timeLimitHit = control.pastDeadline();
   if (!fitsInMemory(out, options)) return out;

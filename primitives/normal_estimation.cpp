@@ -62,6 +62,17 @@ constexpr std::size_t kJetDegree = 2;
 constexpr double kFacePlaneRadiusFraction = 0.02;
 constexpr double kCollinearSine = 0.1;
 constexpr double kEdgeOffFactor = 4.0;
+// twoSheetPlane: the two faces of a thin wall in one neighbourhood.
+constexpr std::size_t kWallMinOwn = 1;
+constexpr std::size_t kWallMinOther = 3;
+constexpr double kWallShare = 0.85;
+constexpr double kWallSeparation = 6.0;
+constexpr double kWallResidualFactor = 2.0;
+constexpr double kWallSheetWidth = 0.1;
+constexpr int kWallMaxStrays = 1;
+constexpr double kWallCover = 0.5;
+constexpr double kWallScanShare = 0.02;
+constexpr std::size_t kWallGateSamples = 50000;
 // A neighbourhood spans a surface when its second principal variance exceeds
 // this fraction of its first (else it is a line up to rounding, and a jet
 // fitted to it would be meaningless).
@@ -241,6 +252,125 @@ std::optional<Vector3> dominantPlane(const std::vector<Point3>& points, const st
   return best;
 }
 
+/// The common normal of two parallel sheets that hold point `i`'s
+/// neighbourhood `hood` (k indices, i first): the faces of a wall thinner
+/// than the neighbourhood. The jet, fitted to both faces, tilts by up to 90
+/// degrees where one face holds fewer points than the other (a tube's inner
+/// face seen through its ends), and no plane through the point holds half
+/// of the neighbourhood. Every plane through i and two neighbours is tried;
+/// the points within `tolerance` of it form i's sheet, those within
+/// `tolerance` of the median offset of the others the second sheet, and the
+/// pair that holds most is kept. Accepted when both sheets hold kWallMinOwn
+/// and kWallMinOther points, together kWallShare of the neighbourhood, and
+/// lie apart by kWallSeparation times their pooled RMS spread about their
+/// planes; the normal is then the least axis of both sheets' points, each
+/// about its own centroid. Empty otherwise (an edge's faces are not
+/// parallel, a curved surface's offsets spread).
+std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
+                                     const std::vector<Vector3>& normals, const std::uint32_t* hood,
+                                     unsigned k, std::size_t i, double tolerance) {
+  const Point3& p = points[i];
+  std::vector<double> rest;
+  int bestCount = 0;
+  Vector3 best = CGAL::NULL_VECTOR;
+  double bestOffset = 0.0;
+  double bestSpread = 0.0;
+  const auto consider = [&](const Vector3& n) {
+    int own = 0;
+    rest.clear();
+    for (unsigned l = 0; l < k; ++l) {
+      const double d = n * (points[hood[l]] - p);
+      if (std::abs(d) <= tolerance) {
+        ++own;
+      } else {
+        rest.push_back(d);
+      }
+    }
+    if (own < int(kWallMinOwn) || rest.size() < kWallMinOther) return;
+    const auto middle = rest.begin() + std::ptrdiff_t(rest.size() / 2);
+    std::nth_element(rest.begin(), middle, rest.end());
+    const double mid = *middle;
+    int other = 0, strays = 0;
+    double spread = 0.0;
+    for (unsigned l = 0; l < k; ++l) {
+      const double d = n * (points[hood[l]] - p);
+      if (std::abs(d) <= tolerance) {
+        spread += std::abs(d);
+      } else if (std::abs(d - mid) <= tolerance) {
+        ++other;
+        spread += std::abs(d - mid);
+      } else if (d * mid > 0.0) {
+        ++strays;  // between the sheets or beyond the second: a face that goes on
+      }
+    }
+    if (other < int(kWallMinOther) || strays > kWallMaxStrays) return;
+    if (own + other > bestCount || (own + other == bestCount && spread < bestSpread)) {
+      bestCount = own + other;
+      bestSpread = spread;
+      best = n;
+      bestOffset = mid;
+    }
+  };
+  for (unsigned a = 1; a < k; ++a) {
+    const Vector3 u = points[hood[a]] - p;
+    for (unsigned b = a + 1; b < k; ++b) {
+      const Vector3 v = points[hood[b]] - p;
+      Vector3 n = CGAL::cross_product(u, v);
+      const double length = std::sqrt(n.squared_length());
+      if (!(length > kCollinearSine * std::sqrt(u.squared_length() * v.squared_length()))) continue;
+      consider(n / length);
+    }
+  }
+  // A point alone on its face among the other face's points: no plane
+  // through it and two of them is the faces', but their own jets are.
+  for (unsigned l = 1; l < k; ++l) {
+    if (isUsable(normals[hood[l]])) consider(normals[hood[l]]);
+  }
+  if (double(bestCount) < kWallShare * double(k)) return std::nullopt;
+  // Both sheets about their own centroids, and their spread about their planes.
+  std::vector<Vec3> sheet[2];
+  for (unsigned l = 0; l < k; ++l) {
+    const Point3& q = points[hood[l]];
+    const double d = best * (q - p);
+    const int s = std::abs(d) <= tolerance ? 0 : std::abs(d - bestOffset) <= tolerance ? 1 : -1;
+    if (s >= 0) sheet[s].emplace_back(q.x(), q.y(), q.z());
+  }
+  std::vector<Vec3> centred;
+  Vec3 centroid[2];
+  for (int s = 0; s < 2; ++s) {
+    centroid[s] = Vec3::Zero();
+    for (const Vec3& q : sheet[s]) centroid[s] += q;
+    centroid[s] /= double(sheet[s].size());
+    for (const Vec3& q : sheet[s]) centred.push_back(q - centroid[s]);
+  }
+  const Vec3 axis = principalAxes(centred).leastAxis();
+  double spread2 = 0.0;
+  for (const Vec3& q : centred) spread2 += axis.dot(q) * axis.dot(q);
+  const double spread = std::sqrt(spread2 / double(centred.size()));
+  if (std::abs(axis.dot(centroid[1] - centroid[0])) < kWallSeparation * spread) return std::nullopt;
+  // The second sheet spreads over the plane, as a face does; the points of
+  // a face across an edge within the band project onto a line along it.
+  const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+  double suu = 0.0, suv = 0.0, svv = 0.0;
+  for (const Vec3& q : sheet[1]) {
+    const Vec3 c = q - centroid[1];
+    suu += u.dot(c) * u.dot(c);
+    suv += u.dot(c) * v.dot(c);
+    svv += v.dot(c) * v.dot(c);
+  }
+  const double mean = 0.5 * (suu + svv);
+  const double half = std::sqrt(0.25 * (suu - svv) * (suu - svv) + suv * suv);
+  if (mean - half < kWallSheetWidth * (mean + half)) return std::nullopt;
+  // ... and lies over the point, not off to one side of it as beyond an edge.
+  const Vec3 pi(p.x(), p.y(), p.z());
+  const Vec3 off = centroid[1] - pi;
+  const double sideways2 = u.dot(off) * u.dot(off) + v.dot(off) * v.dot(off);
+  if (sideways2 > kWallCover * kWallCover * (suu + svv) / double(sheet[1].size())) {
+    return std::nullopt;
+  }
+  return Vector3(axis.x(), axis.y(), axis.z());
+}
+
 /// Sharpens normals near edges. The jet fit blends the normals of the faces
 /// that meet at an edge for every point within a neighbourhood of it. Each
 /// point therefore considers the tangent planes of its neighbours that pass
@@ -251,7 +381,7 @@ std::optional<Vector3> dominantPlane(const std::vector<Point3>& points, const st
 /// wall to its plane -- so where it leaves neighbours out, the point takes
 /// dominantPlane's face instead, when one holds half of them. On smooth
 /// surfaces a point's own plane holds every neighbour and nothing changes.
-void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& normals,
+bool sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& normals,
                     const Neighbourhoods& hoods) {
   const std::size_t n = points.size();
   const unsigned k = hoods.k;
@@ -266,9 +396,43 @@ void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& nor
     }
     residual[i] = std::sqrt(sum2 / k);
   }
+  std::vector<double> ownResidual(residual);
   std::nth_element(residual.begin(), residual.begin() + static_cast<std::ptrdiff_t>(n / 2),
                    residual.end());
   const double typical = residual[n / 2];
+  std::nth_element(residual.begin(), residual.begin() + static_cast<std::ptrdiff_t>(n / 5),
+                   residual.end());
+  const double faceNoise = residual[n / 5];
+
+  // The faces of walls thinner than the neighbourhoods, where the scan has
+  // such walls (kWallScanShare of its points).
+  std::vector<std::optional<Vector3>> wall(n);
+  const auto findWalls = [&](std::size_t stride) {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, (n + stride - 1) / stride, 64), [&](const auto& range) {
+          for (std::size_t s = range.begin(); s != range.end(); ++s) {
+            const std::size_t i = s * stride;
+            if (wall[i] || !(ownResidual[i] > kWallResidualFactor * faceNoise)) {
+              continue;
+            }
+            const double tolerance = std::max(kFacePlaneRadiusFraction * hoods.radius[i],
+                                              kOnPlaneNoiseFactor * faceNoise);
+            wall[i] = twoSheetPlane(points, normals, hoods.of(i), k, i, tolerance);
+          }
+        });
+  };
+  // Whether the scan has thin walls, from a deterministic subset of points
+  // first (most scans have none: the search costs more than the jets).
+  const std::size_t stride = std::max<std::size_t>(1, n / kWallGateSamples);
+  findWalls(stride);
+  const auto walls = std::size_t(
+      std::count_if(wall.begin(), wall.end(), [](const auto& w) { return w.has_value(); }));
+  const bool thinWalls = double(walls) >= kWallScanShare * double((n + stride - 1) / stride);
+  if (thinWalls) {
+    if (stride > 1) findWalls(1);
+  } else {
+    wall.assign(n, std::nullopt);
+  }
 
   std::vector<Vector3> sharpened = normals;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
@@ -298,12 +462,18 @@ void sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& nor
         }
       }
       sharpened[i] = normals[chosen];
+      if (wall[i]) {
+        sharpened[i] = *wall[i];
+        continue;
+      }
       if (best < int(k)) {
-        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance)) sharpened[i] = *face;
+        if (const auto face = dominantPlane(points, hood, k, i, faceTolerance))
+          sharpened[i] = *face;
       }
     }
   });
   normals = std::move(sharpened);
+  return thinWalls;
 }
 
 /// How consistently the normals at p and q, on pieces of the scan separated
@@ -508,14 +678,14 @@ void estimateNormals(PointCloud& cloud, int neighbors) {
   std::vector<Point3> points;
   points.reserve(m);
   for (const Vec3& p : distinct.points) points.emplace_back(p.x(), p.y(), p.z());
-  sharpenAtEdges(points, normals, hoods);
+  const bool thinWalls = sharpenAtEdges(points, normals, hoods);
   matchPieces(points, normals, orientAlongSpanningForest(points, normals, hoods));
   orientOutwards(points, normals);
   std::vector<Vec3> unit(m);
   for (std::size_t i = 0; i < m; ++i) {
     unit[i] = Vec3(normals[i].x(), normals[i].y(), normals[i].z()).normalized();
   }
-  orientNormals(distinct.points, unit, hoods.indices, hoods.k);
+  orientNormals(distinct.points, unit, hoods.indices, hoods.k, thinWalls);
 
   cloud.normals.resize(n);
   for (std::size_t i = 0; i < n; ++i) cloud.normals[i] = unit[distinct.of[i]];

@@ -11,6 +11,10 @@ namespace csgvox {
 /// 1. a jet (quadric) fit to the point's `neighbors` nearest neighbours;
 /// 2. near sharp edges, where such a fit blends the two faces, the normal of
 ///    the neighbour whose tangent plane holds most of the neighbourhood;
+///    where a neighbourhood lies on two parallel sheets (the faces of a wall
+///    thinner than it, the point's own face often holding the fewer points),
+///    the normal of both sheets fitted together, when at least 2 % of the
+///    scan's points show such sheets (the scan has thin walls);
 /// 3. orientations propagated along a minimum spanning forest of the
 ///    neighbour graph (Hoppe's method, with edges that cross the surface,
 ///    e.g. through a thin wall, made expensive); pieces the graph does not
@@ -19,7 +23,9 @@ namespace csgvox {
 ///    they mostly point inwards;
 /// 4. orientNormals: smooth patches that visibility from outside shows
 ///    clearly (flat caps, bores, which the spanning forest may turn over
-///    as a whole) take the side it shows.
+///    as a whole) take the side it shows; on a scan with thin walls, the
+///    patches it leaves open take theirs from a decided face across the
+///    wall.
 ///
 /// Reliable for scans of closed surfaces sampled densely relative to their
 /// features; walls much thinner than the neighbourhood may still come out

@@ -102,6 +102,12 @@ constexpr double kSeedSignificance = 4.0;
 // ... and only when the decided neighbours agree on this fraction of the
 // edges joining them to the cluster.
 constexpr double kClusterAgreement = 0.9;
+// A patch nothing else decides takes its side from decided faces across a
+// thin gap when at least this many of its points' neighbours there agree
+// (sidesAcrossThinGaps), over at most kAcrossRounds rounds.
+constexpr double kAcrossMinVotes = 5.0;
+constexpr double kAcrossLateral = 1.0;
+constexpr int kAcrossRounds = 8;
 struct Hoods {
   std::span<const std::uint32_t> indices;
   unsigned k;
@@ -486,6 +492,64 @@ Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normal
   return votes;
 }
 
+/// The side of patches that nothing decides firmly, from a firmly decided
+/// face close across their tangent plane: the other face of a thin wall or
+/// of a narrow slot, nearer than the occupancy grid resolves, so that the
+/// parity rays count the wall's two faces as one crossing and the escape
+/// rays jump it; such faces, seen at grazing angles, also fall into patches
+/// of a few points whose few rays decide nothing. A neighbour j of point i,
+/// with a parallel normal, lying across i's tangent plane (kParallelFaceFraction
+/// of their distance and kAcrossNoise times the noise) and nearly straight
+/// across (within kAcrossLateral of the offset sideways: beside a step, the
+/// upper face's points lie off to one side), tells which of the two it is:
+/// where j's outward normal points away from i, the gap between them is
+/// material (a wall) and i's outward normal points away from j; where it
+/// points towards i, the gap is air (a slot) and i's normal points towards
+/// j. A patch takes the side its points' such neighbours imply when at least
+/// kAcrossMinVotes of them agree (kClusterAgreement); the patches so decided
+/// are firm for the next round (a sheet whose inner face is split into small
+/// patches is decided from its decided faces inwards).
+void sidesAcrossThinGaps(std::span<const Vec3> points, std::span<const Vec3> normals,
+                         const Hoods& hoods, const Patches& patches, double noise,
+                         std::vector<int>& sign, std::vector<char>& firm) {
+  const std::size_t count = patches.points.size();
+  for (int round = 0; round < kAcrossRounds; ++round) {
+    std::vector<int> next(sign);
+    std::vector<char> nextFirm(firm);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t p) {
+      if (firm[p]) return;
+      double keep = 0.0, flip = 0.0;
+      for (std::uint32_t i : patches.points[p]) {
+        const Vec3& ni = normals[i];
+        for (unsigned l = 1; l < hoods.k; ++l) {
+          const std::uint32_t j = hoods.of(i)[l];
+          const std::uint32_t pj = patches.of[j];
+          if (!firm[pj] || std::abs(ni.dot(normals[j])) < kSmoothCosine) continue;
+          const Vec3 d = points[j] - points[i];
+          const double offset = ni.dot(d);
+          const double across = std::abs(offset);
+          if (across <= std::max(kParallelFaceFraction * d.norm(), kAcrossNoise * noise) ||
+              (d - offset * ni).norm() > kAcrossLateral * across) {
+            continue;
+          }
+          const bool wall = sign[pj] * normals[j].dot(d) > 0.0;  // j's outside faces away from i
+          // i keeps its normal when it points away from j across a wall, or
+          // towards j across a slot.
+          ((offset < 0.0) == wall ? keep : flip) += 1.0;
+        }
+      }
+      const double total = keep + flip;
+      if (total < kAcrossMinVotes || std::max(keep, flip) < kClusterAgreement * total) return;
+      next[p] = keep >= flip ? 1 : -1;
+      nextFirm[p] = 1;
+    });
+    const bool changed = nextFirm != firm;
+    sign.swap(next);
+    firm.swap(nextFirm);
+    if (!changed) break;
+  }
+}
+
 /// Each patch's side: +1 (its normals stay), -1 (they flip) or 0 (nothing
 /// decides it; it keeps the incoming normals). A patch whose points vote
 /// clearly (kDecisiveVote) takes that side. The undecided patches joined
@@ -498,12 +562,18 @@ Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normal
 /// lean the other way. Otherwise the cluster keeps the incoming normals.
 std::vector<int> patchSigns(std::span<const Vec3> points, std::span<const Vec3> normals,
                             const Hoods& hoods, const Patches& patches, const Votes& votes,
-                            double noise) {
+                            double noise, bool thinWalls) {
   const std::size_t count = patches.points.size();
   std::vector<int> sign(count, 0);
+  // Firm: decided by significant votes (kSeedSignificance), or by a cluster.
+  std::vector<char> firm(count, 0);
+  const auto significant = [&](std::size_t p) {
+    return std::abs(votes.sum[p]) >= kSeedSignificance * std::sqrt(double(votes.count[p]));
+  };
   for (std::size_t p = 0; p < count; ++p) {
     const double mean = votes.count[p] ? votes.sum[p] / double(votes.count[p]) : 0.0;
     if (std::abs(mean) >= kDecisiveVote) sign[p] = mean < 0.0 ? -1 : 1;
+    firm[p] = sign[p] != 0 && significant(p);
   }
   // The smooth edges between two patches: (lower patch, higher patch,
   // +1 where the normals agree, -1 where they are opposite).
@@ -574,10 +644,7 @@ std::vector<int> patchSigns(std::span<const Vec3> points, std::span<const Vec3> 
     for (std::uint32_t u : cl) {
       for (const Link& link : links[u]) {
         const std::uint32_t d = link.other;
-        if (sign[d] == 0 ||
-            std::abs(votes.sum[d]) < kSeedSignificance * std::sqrt(double(votes.count[d]))) {
-          continue;
-        }
+        if (sign[d] == 0 || !significant(d)) continue;
         const int implied = sign[d] * (link.net > 0 ? 1 : -1) * relative[u];
         weight[implied > 0 ? 0 : 1] += std::abs(link.net);
       }
@@ -589,15 +656,19 @@ std::vector<int> patchSigns(std::span<const Vec3> points, std::span<const Vec3> 
     double own = 0.0;
     for (std::uint32_t u : cl) own += relative[u] * votes.sum[u];
     if (own * side < 0.0) continue;
-    for (std::uint32_t u : cl) sign[u] = side * relative[u];
+    for (std::uint32_t u : cl) {
+      sign[u] = side * relative[u];
+      firm[u] = 1;
+    }
   }
+  if (thinWalls) sidesAcrossThinGaps(points, normals, hoods, patches, noise, sign, firm);
   return sign;
 }
 
 }  // namespace
 
 void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
-                   std::span<const std::uint32_t> neighbours, unsigned k) {
+                   std::span<const std::uint32_t> neighbours, unsigned k, bool thinWalls) {
   const std::size_t n = points.size();
   if (normals.size() != n || neighbours.size() != n * std::size_t(k) || k < 2) {
     throw std::invalid_argument("orientNormals: sizes of points, normals, neighbours disagree");
@@ -631,7 +702,8 @@ void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
   }
   const Votes votes =
       visibilityVotes(points, normals, patches, spacing, medianSpacing, noise, hoods);
-  const std::vector<int> sign = patchSigns(points, normals, hoods, patches, votes, noise);
+  const std::vector<int> sign =
+      patchSigns(points, normals, hoods, patches, votes, noise, thinWalls);
   for (std::size_t p = 0; p < patches.points.size(); ++p) {
     for (std::uint32_t i : patches.points[p]) {
       if (sign[p] == 0) {

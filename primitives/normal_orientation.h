@@ -58,6 +58,17 @@ namespace csgvox {
 ///    across those edges when their votes are significant (vote sum at
 ///    least 4 times the square root of their count), they agree (on 90 %
 ///    of the edges) and the cluster's own votes do not lean the other way.
+///    With `thinWalls` (the scan's walls are thinner than its
+///    neighbourhoods: estimateNormals found two parallel sheets in 2 % of
+///    them), a patch that no significant vote or cluster decided takes its
+///    side from firmly decided faces close across its tangent plane and
+///    nearly straight across: where such a face's outside points away from
+///    the patch, the gap is material (a wall) and the patch faces away from
+///    it; where it points towards the patch, the gap is air (a slot) and the
+///    patch faces it. Both faces of a wall look alike to the rays: the
+///    occupancy grid counts them as one crossing, and its inner face, seen
+///    at grazing angles, falls into patches of a few points whose few rays
+///    decide nothing.
 ///    The other patches (faces next to an unseen one, where
 ///    both sides look alike) keep the incoming normals.
 ///
@@ -65,6 +76,6 @@ namespace csgvox {
 /// nearest neighbours). Deterministic with any number of threads.
 /// @throw std::invalid_argument if the sizes disagree or k < 2.
 void orientNormals(std::span<const Vec3> points, std::span<Vec3> normals,
-                   std::span<const std::uint32_t> neighbours, unsigned k);
+                   std::span<const std::uint32_t> neighbours, unsigned k, bool thinWalls = false);
 
 }  // namespace csgvox

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 #include "core/nearest_neighbors.h"
@@ -20,6 +21,12 @@ namespace {
 constexpr double kParallel = 0.98;
 // A face's points along the round, at least (count).
 constexpr std::size_t kMinEvidence = 8;
+// A plane tilted this far from a thin sheet's faces (radians), with this
+// share of its points inside the sheet's slab, is the sheet's edge.
+constexpr double kTiltMin = 5.0 * std::numbers::pi / 180.0;
+constexpr double kTiltMax = 35.0 * std::numbers::pi / 180.0;
+constexpr double kInSlab = 0.8;
+constexpr double kTiltedShare = 0.1;
 // Points of a face whose spacing is measured, about.
 constexpr std::size_t kSpacingSamples = 2000;
 
@@ -162,6 +169,35 @@ bool inSheetCorner(const PointCloud& cloud, const DetectionResult& result, const
   return false;
 }
 
+// True when plane `s` is a thin sheet's square edge read as a narrow
+// tilted face: its normal within kTiltMin..kTiltMax degrees of the sheet's
+// faces', at least kInSlab of its points inside the sheet's slab (within two
+// noise deviations), and at most kTiltedShare as many points as the smaller
+// face. Normals blended across the edge put such a plane through the strip
+// along it.
+bool tiltedAtSheetEdge(const PointCloud& cloud, const DetectionResult& result, std::size_t s,
+                       const std::vector<Sheet>& sheets, double noise) {
+  const auto* p = result.surfaces[s].as<PlaneSurface>();
+  if (p == nullptr || result.surfaces[s].inliers.empty()) return false;
+  for (const Sheet& sheet : sheets) {
+    if (s == sheet.first || s == sheet.second) continue;
+    const double c = std::abs(p->normal.dot(sheet.normal));
+    if (c > std::cos(kTiltMin) || c < std::cos(kTiltMax)) continue;
+    std::size_t inside = 0;
+    for (std::uint32_t i : result.surfaces[s].inliers) {
+      const double h = sheet.normal.dot(cloud.points[i]);
+      inside += (h <= sheet.offset + 2.0 * noise && h >= -sheet.otherOffset - 2.0 * noise) ? 1 : 0;
+    }
+    const std::size_t smaller = std::min(result.surfaces[sheet.first].inliers.size(),
+                                         result.surfaces[sheet.second].inliers.size());
+    if (double(inside) >= kInSlab * double(result.surfaces[s].inliers.size()) &&
+        double(result.surfaces[s].inliers.size()) <= kTiltedShare * double(smaller)) {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& result,
@@ -171,7 +207,10 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
       std::any_of(result.surfaces.begin(), result.surfaces.end(), [](const Surface& s) {
         return s.convex && (s.as<TorusSurface>() != nullptr || s.as<CylinderSurface>() != nullptr);
       });
-  if (!anyRound) return stats;
+  const auto planes =
+      std::count_if(result.surfaces.begin(), result.surfaces.end(),
+                    [](const Surface& s) { return s.as<PlaneSurface>() != nullptr; });
+  if (!anyRound && planes < 3) return stats;
   const std::vector<Sheet> sheets = thinSheets(cloud, result, options);
   if (sheets.empty()) return stats;
   const double eps = result.epsilon;
@@ -261,7 +300,13 @@ SheetRoundStats replaceSheetRounds(const PointCloud& cloud, DetectionResult& res
       ++stats.corners;
     }
   }
-  if (stats.tori + stats.cylinders + stats.corners == 0) return stats;
+  for (std::size_t s = 0; s < found; ++s) {
+    if (!drop[s] && tiltedAtSheetEdge(cloud, result, s, sheets, noise)) {
+      drop[s] = 1;
+      ++stats.tilted;
+    }
+  }
+  if (stats.tori + stats.cylinders + stats.corners + stats.tilted == 0) return stats;
   // Renumber: the kept surfaces in their order, then the end faces.
   const bool withCentroids = result.centroids.size() == found;
   std::vector<int> index(found, -1);

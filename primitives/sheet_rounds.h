@@ -10,7 +10,9 @@
 /// cylinder becomes the end face, placed where its outermost points are.
 /// Where two such sheets meet at a right angle, the blended corner reads as
 /// a convex cylinder of about the thickness in radius; it is dropped when
-/// the scan's points reach the square corner's outer line.
+/// the scan's points reach the square corner's outer line. The blend along
+/// an edge also reads as a narrow plane tilted from the faces; it is
+/// dropped.
 
 #include <cstddef>
 
@@ -36,6 +38,7 @@ struct SheetRoundStats {
   std::size_t tori = 0;       ///< tori along a hole's rim dropped
   std::size_t cylinders = 0;  ///< cylinders along a free edge made end faces
   std::size_t corners = 0;    ///< cylinders in the corner of two sheets dropped
+  std::size_t tilted = 0;     ///< planes tilted along a sheet's edge dropped
 };
 
 /// Drops each convex torus of `result` that is a thin sheet's hole rim
@@ -50,7 +53,10 @@ struct SheetRoundStats {
 /// square corner of two thin sheets at a right angle (axis along their
 /// common edge, inside both slabs, radius from 15 % of the thinner's
 /// thickness to 135 % of the thicker's, at least 8 of the scan's points on
-/// the corner's outer line along its span). The end face holds the cylinder's
+/// the corner's outer line along its span). Drops each plane tilted by 5 to
+/// 35 degrees from a thin sheet's faces with 80 % of its points inside the
+/// sheet's slab and at most a tenth as many points as the smaller face. The
+/// end face holds the cylinder's
 /// points within two noise deviations of it; the other points of a dropped
 /// surface are unassigned. For estimated normals only (a scanner's own, or
 /// exact ones, tell a round from an edge). `result` must be the output of

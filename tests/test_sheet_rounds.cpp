@@ -189,6 +189,41 @@ TEST(SheetRounds, AnEdgeCylinderWhoseEndFaceWasFoundIsDroppedAndOneOfAnotherRadi
   EXPECT_EQ(wide.count(SurfaceType::Cylinder), 1u);
 }
 
+// A 1.5 thick sheet ending at x = 15 whose bottom edge's strip (x from 13.8
+// to 15, z within the slab) detection fitted as a narrow plane tilted by
+// `tiltDegrees` from the bottom face, through the point (15, 0, 0.3).
+Sheet edgeWithTiltedPlane(double tiltDegrees, double stripTop) {
+  Sheet sheet(1.5, [](double x, double) { return x < 13.8; });
+  const double a = tiltDegrees * std::numbers::pi / 180.0;
+  const Vec3 normal(std::sin(a), 0.0, -std::cos(a));
+  const Vec3 through(15.0, 0.0, 0.3);
+  sheet.round(PlaneSurface{normal, normal.dot(through)}, 80, [&](std::mt19937& rng) {
+    std::uniform_real_distribution<double> x(13.8, 15.0), y(-15.0, 15.0);
+    const double px = x(rng);
+    // On the plane: z from n.p = offset.
+    const double pz = (normal.dot(through) - normal.x() * px) / normal.z();
+    return Vec3(px, y(rng), std::min(pz, stripTop));
+  });
+  sheet.finish();
+  return sheet;
+}
+
+TEST(SheetRounds, APlaneTiltedAlongAThinSheetsEdgeIsDroppedAndAChamferStays) {
+  // 15 degrees: the blend of the edge; its points dropped, the faces kept.
+  Sheet edge = edgeWithTiltedPlane(15.0, 10.0);
+  const SheetRoundStats stats = replaceSheetRounds(edge.cloud, edge.result);
+  EXPECT_EQ(stats.tilted, 1u);
+  EXPECT_EQ(edge.count(SurfaceType::Plane), 2u);
+  edge.expectAssignmentConsistent();
+  // 45 degrees (a chamfer), or a plane whose points leave the slab: kept.
+  Sheet chamfer = edgeWithTiltedPlane(45.0, 10.0);
+  EXPECT_EQ(replaceSheetRounds(chamfer.cloud, chamfer.result).tilted, 0u);
+  EXPECT_EQ(chamfer.count(SurfaceType::Plane), 3u);
+  Sheet outside = edgeWithTiltedPlane(15.0, 10.0);
+  for (std::uint32_t i : outside.result.surfaces.back().inliers) outside.cloud.points[i].z() += 2.0;
+  EXPECT_EQ(replaceSheetRounds(outside.cloud, outside.result).tilted, 0u);
+}
+
 // An L of two 1 thick sheets: a floor z in [0, 1] for y < 20 and a wall y in
 // [19, 20] for z > 0, each face a plane whose points stop 0.3 short of the
 // corner's blended strip, and a convex cylinder of radius 0.9 along x in the
