@@ -233,6 +233,23 @@ TEST(OrientNormals, SameNormalsOnThinWallsWithAnyNumberOfThreads) {
   EXPECT_EQ(one.normals, scan.cloud.normals);
 }
 
+TEST(OrientNormals, SameNormalsOnWallsThinnerThanTheNeighbourhoodsWithAnyNumberOfThreads) {
+  // InverseCSG 150's walls: both faces' normals fitted together, and the
+  // inner faces' patches decided across the walls.
+  const Scan scan =
+      readScan(fs::path(CSGVOX_DATA_DIR) / "regressions" / "inversecsg-150-scanner.ply");
+  PointCloud one{scan.cloud.points, {}}, two = one;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    estimateNormals(one, 18);
+  }
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    estimateNormals(two, 18);
+  }
+  EXPECT_EQ(one.normals, two.normals);
+}
+
 TEST(OrientNormals, RejectsMismatchedSizes) {
   std::vector<Vec3> points(10, Vec3::Zero()), normals(9, Vec3::UnitZ());
   std::vector<std::uint32_t> hoods(20, 0);
