@@ -62,15 +62,26 @@ constexpr std::size_t kJetDegree = 2;
 constexpr double kFacePlaneRadiusFraction = 0.02;
 constexpr double kCollinearSine = 0.1;
 constexpr double kEdgeOffFactor = 4.0;
-// twoSheetPlane: the two faces of a thin wall in one neighbourhood.
-constexpr std::size_t kWallMinOwn = 1;
+// twoSheetPlane: the two faces of a thin wall in one neighbourhood. The
+// second sheet holds at least kWallMinOther points, both together kWallShare
+// of the neighbourhood, at most kWallMaxStrays points lie on the second's
+// side off both; the sheets lie kWallSeparation times their pooled spread
+// apart; the second's narrower in-plane variance is at least
+// kWallSheetWidth of its wider, its centroid within kWallCover of its RMS
+// in-plane radius of the point, sideways.
 constexpr std::size_t kWallMinOther = 3;
 constexpr double kWallShare = 0.85;
-constexpr double kWallSeparation = 6.0;
-constexpr double kWallResidualFactor = 2.0;
-constexpr double kWallSheetWidth = 0.1;
 constexpr int kWallMaxStrays = 1;
+constexpr double kWallSeparation = 6.0;
+constexpr double kWallSheetWidth = 0.1;
 constexpr double kWallCover = 0.5;
+// Searched where a point's neighbours lie off its tangent plane by more than
+// this many times the face noise (the 20 % quantile of those residuals).
+constexpr double kWallResidualFactor = 2.0;
+// A scan has thin walls when this share of its points (of at most
+// kWallGateSamples, a stride over the scan) shows two sheets. Measured: the
+// bundled parts' scanner scans and the InverseCSG parts' without thin walls
+// 0.3-1.7 % (edges), InverseCSG 150 16 %.
 constexpr double kWallScanShare = 0.02;
 constexpr std::size_t kWallGateSamples = 50000;
 // A neighbourhood spans a surface when its second principal variance exceeds
@@ -185,6 +196,25 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
   return hoods;
 }
 
+/// Calls `f` with the unit normal of every plane through point `i` and two
+/// of its neighbours `hood` (k indices, i first), but nearly collinear
+/// triples (their planes the rounding turns).
+template <class F>
+void forEachPlaneThrough(const std::vector<Point3>& points, const std::uint32_t* hood, unsigned k,
+                         std::size_t i, const F& f) {
+  const Point3& p = points[i];
+  for (unsigned a = 1; a < k; ++a) {
+    const Vector3 u = points[hood[a]] - p;
+    for (unsigned b = a + 1; b < k; ++b) {
+      const Vector3 v = points[hood[b]] - p;
+      const Vector3 n = CGAL::cross_product(u, v);
+      const double length = std::sqrt(n.squared_length());
+      if (!(length > kCollinearSine * std::sqrt(u.squared_length() * v.squared_length()))) continue;
+      f(n / length);
+    }
+  }
+}
+
 /// The plane through point `i` that holds most of its neighbourhood `hood`
 /// (k indices, i first) within `tolerance`: every plane through i and two
 /// neighbours is tried, and the best is refitted by least squares to the
@@ -197,31 +227,22 @@ std::optional<Vector3> dominantPlane(const std::vector<Point3>& points, const st
   int bestCount = 0;
   double bestSpread = 0.0;
   Vector3 best = CGAL::NULL_VECTOR;
-  for (unsigned a = 1; a < k; ++a) {
-    const Vector3 u = points[hood[a]] - p;
-    for (unsigned b = a + 1; b < k; ++b) {
-      const Vector3 v = points[hood[b]] - p;
-      Vector3 n = CGAL::cross_product(u, v);
-      const double length = std::sqrt(n.squared_length());
-      // Nearly collinear triples give planes the rounding turns.
-      if (!(length > kCollinearSine * std::sqrt(u.squared_length() * v.squared_length()))) continue;
-      n = n / length;
-      int count = 0;
-      double spread = 0.0;
-      for (unsigned l = 0; l < k; ++l) {
-        const double d = std::abs(n * (points[hood[l]] - p));
-        if (d <= tolerance) {
-          ++count;
-          spread += d;
-        }
-      }
-      if (count > bestCount || (count == bestCount && spread < bestSpread)) {
-        bestCount = count;
-        bestSpread = spread;
-        best = n;
+  forEachPlaneThrough(points, hood, k, i, [&](const Vector3& n) {
+    int count = 0;
+    double spread = 0.0;
+    for (unsigned l = 0; l < k; ++l) {
+      const double d = std::abs(n * (points[hood[l]] - p));
+      if (d <= tolerance) {
+        ++count;
+        spread += d;
       }
     }
-  }
+    if (count > bestCount || (count == bestCount && spread < bestSpread)) {
+      bestCount = count;
+      bestSpread = spread;
+      best = n;
+    }
+  });
   if (2 * bestCount < int(k)) return std::nullopt;
   // The neighbours the face leaves out must lie well off it, as across an
   // edge, not just beyond the tolerance, as on a curved surface.
@@ -255,17 +276,21 @@ std::optional<Vector3> dominantPlane(const std::vector<Point3>& points, const st
 /// The common normal of two parallel sheets that hold point `i`'s
 /// neighbourhood `hood` (k indices, i first): the faces of a wall thinner
 /// than the neighbourhood. The jet, fitted to both faces, tilts by up to 90
-/// degrees where one face holds fewer points than the other (a tube's inner
-/// face seen through its ends), and no plane through the point holds half
-/// of the neighbourhood. Every plane through i and two neighbours is tried;
-/// the points within `tolerance` of it form i's sheet, those within
-/// `tolerance` of the median offset of the others the second sheet, and the
-/// pair that holds most is kept. Accepted when both sheets hold kWallMinOwn
-/// and kWallMinOther points, together kWallShare of the neighbourhood, and
-/// lie apart by kWallSeparation times their pooled RMS spread about their
-/// planes; the normal is then the least axis of both sheets' points, each
-/// about its own centroid. Empty otherwise (an edge's faces are not
-/// parallel, a curved surface's offsets spread).
+/// degrees where the point's own face holds the fewer points (a tube's
+/// inner face seen through its ends). The candidate normals are those of
+/// the planes through i and two neighbours and the neighbours' own jets
+/// (`normals`: a point alone on its face among the other face's points);
+/// for each, the points within `tolerance` of the plane through i form i's
+/// sheet and those within `tolerance` of the others' median offset the
+/// second, with at most kWallMaxStrays more on the second's side (between
+/// or beyond: a face that goes on, as across an edge). The pair holding
+/// most (then the least spread) is accepted when it holds kWallShare of
+/// the neighbourhood, the second sheet kWallMinOther points, and the
+/// sheets lie apart by kWallSeparation times their pooled RMS spread about
+/// their planes; when the second spreads over its plane (kWallSheetWidth:
+/// a face across an edge projects onto a line) and lies over the point
+/// (kWallCover: beyond an edge it lies off to one side). The normal is the
+/// least axis of both sheets' points, each about its own centroid.
 std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
                                      const std::vector<Vector3>& normals, const std::uint32_t* hood,
                                      unsigned k, std::size_t i, double tolerance) {
@@ -286,7 +311,7 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
         rest.push_back(d);
       }
     }
-    if (own < int(kWallMinOwn) || rest.size() < kWallMinOther) return;
+    if (rest.size() < kWallMinOther) return;
     const auto middle = rest.begin() + std::ptrdiff_t(rest.size() / 2);
     std::nth_element(rest.begin(), middle, rest.end());
     const double mid = *middle;
@@ -311,16 +336,7 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
       bestOffset = mid;
     }
   };
-  for (unsigned a = 1; a < k; ++a) {
-    const Vector3 u = points[hood[a]] - p;
-    for (unsigned b = a + 1; b < k; ++b) {
-      const Vector3 v = points[hood[b]] - p;
-      Vector3 n = CGAL::cross_product(u, v);
-      const double length = std::sqrt(n.squared_length());
-      if (!(length > kCollinearSine * std::sqrt(u.squared_length() * v.squared_length()))) continue;
-      consider(n / length);
-    }
-  }
+  forEachPlaneThrough(points, hood, k, i, consider);
   // A point alone on its face among the other face's points: no plane
   // through it and two of them is the faces', but their own jets are.
   for (unsigned l = 1; l < k; ++l) {
