@@ -397,6 +397,20 @@ class Occupancy {
   std::vector<unsigned char> cells_;
 };
 
+/// Where neighbour j, its normal parallel to point i's (kSmoothCosine, sign
+/// ignored), lies across i's tangent plane (its offset along i's normal
+/// over kParallelFaceFraction of their distance and kAcrossNoise times the
+/// noise): that offset, the other face of a thin wall or slot. 0 otherwise.
+double parallelFaceAcross(std::span<const Vec3> points, std::span<const Vec3> normals,
+                          std::size_t i, std::size_t j, double noise) {
+  if (std::abs(normals[i].dot(normals[j])) < kSmoothCosine) return 0.0;
+  const Vec3 d = points[j] - points[i];
+  const double offset = normals[i].dot(d);
+  return std::abs(offset) > std::max(kParallelFaceFraction * d.norm(), kAcrossNoise * noise)
+             ? offset
+             : 0.0;
+}
+
 /// Per patch: the sum of its sampled points' visibility votes and their
 /// count. A point's vote is, over its rays on both sides, +1 for each ray
 /// that crosses the surface an even number of times on the side of its
@@ -435,10 +449,7 @@ Votes visibilityVotes(std::span<const Vec3> points, std::span<const Vec3> normal
     bool across[2] = {false, false};
     for (unsigned l = 1; l < hoods.k; ++l) {
       const std::uint32_t j = hoods.of(i)[l];
-      if (std::abs(nrm.dot(normals[j])) < kSmoothCosine) continue;
-      const Vec3 d = points[j] - points[i];
-      const double offset = nrm.dot(d);
-      if (std::abs(offset) > std::max(kParallelFaceFraction * d.norm(), kAcrossNoise * noise)) {
+      if (const double offset = parallelFaceAcross(points, normals, i, j, noise); offset != 0.0) {
         across[offset > 0 ? 0 : 1] = true;
       }
     }
@@ -524,12 +535,10 @@ void sidesAcrossThinGaps(std::span<const Vec3> points, std::span<const Vec3> nor
         for (unsigned l = 1; l < hoods.k; ++l) {
           const std::uint32_t j = hoods.of(i)[l];
           const std::uint32_t pj = patches.of[j];
-          if (!firm[pj] || std::abs(ni.dot(normals[j])) < kSmoothCosine) continue;
+          if (!firm[pj]) continue;
+          const double offset = parallelFaceAcross(points, normals, i, j, noise);
           const Vec3 d = points[j] - points[i];
-          const double offset = ni.dot(d);
-          const double across = std::abs(offset);
-          if (across <= std::max(kParallelFaceFraction * d.norm(), kAcrossNoise * noise) ||
-              (d - offset * ni).norm() > kAcrossLateral * across) {
+          if (offset == 0.0 || (d - offset * ni).norm() > kAcrossLateral * std::abs(offset)) {
             continue;
           }
           const bool wall = sign[pj] * normals[j].dot(d) > 0.0;  // j's outside faces away from i
