@@ -300,11 +300,12 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
   Vector3 best = CGAL::NULL_VECTOR;
   double bestOffset = 0.0;
   double bestSpread = 0.0;
+  std::vector<double> offset(k);
   const auto consider = [&](const Vector3& n) {
     int own = 0;
     rest.clear();
     for (unsigned l = 0; l < k; ++l) {
-      const double d = n * (points[hood[l]] - p);
+      const double d = offset[l] = n * (points[hood[l]] - p);
       if (std::abs(d) <= tolerance) {
         ++own;
       } else {
@@ -317,8 +318,7 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
     const double mid = *middle;
     int other = 0, strays = 0;
     double spread = 0.0;
-    for (unsigned l = 0; l < k; ++l) {
-      const double d = n * (points[hood[l]] - p);
+    for (const double d : offset) {
       if (std::abs(d) <= tolerance) {
         spread += std::abs(d);
       } else if (std::abs(d - mid) <= tolerance) {

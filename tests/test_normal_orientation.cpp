@@ -36,6 +36,12 @@ PointCloud surfaceOf(const test::RawScan& raw, std::vector<Vec3>& truth) {
   return cloud;
 }
 
+// estimateNormals with at most `threads` worker threads.
+void estimateOnThreads(PointCloud& cloud, int threads) {
+  const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  estimateNormals(cloud, 18);
+}
+
 double signAgreement(const std::vector<Vec3>& estimated, const std::vector<Vec3>& truth) {
   std::size_t same = 0;
   for (std::size_t i = 0; i < truth.size(); ++i) same += estimated[i].dot(truth[i]) > 0.0;
@@ -206,14 +212,8 @@ TEST(OrientNormals, SameNormalsWithAnyNumberOfThreads) {
   std::vector<Vec3> truth;
   const PointCloud raw = surfaceOf(test::makeRawScan("flange", o), truth);
   PointCloud one = raw, two = raw;
-  {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    estimateNormals(one, 18);
-  }
-  {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    estimateNormals(two, 18);
-  }
+  estimateOnThreads(one, 1);
+  estimateOnThreads(two, 2);
   EXPECT_EQ(one.normals, two.normals);
 }
 
@@ -221,14 +221,8 @@ TEST(OrientNormals, SameNormalsOnThinWallsWithAnyNumberOfThreads) {
   // The tray's walls set the thin-wall mode (its patches flooded twice).
   const Scan scan = readScan(fs::path(CSGVOX_DATA_DIR) / "thin" / "thin_tray" / "scan_scanner.ply");
   PointCloud one{scan.cloud.points, {}}, two = one;
-  {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    estimateNormals(one, 18);
-  }
-  {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    estimateNormals(two, 18);
-  }
+  estimateOnThreads(one, 1);
+  estimateOnThreads(two, 2);
   EXPECT_EQ(one.normals, two.normals);
   EXPECT_EQ(one.normals, scan.cloud.normals);
 }
@@ -239,14 +233,8 @@ TEST(OrientNormals, SameNormalsOnWallsThinnerThanTheNeighbourhoodsWithAnyNumberO
   const Scan scan =
       readScan(fs::path(CSGVOX_DATA_DIR) / "regressions" / "inversecsg-150-scanner.ply");
   PointCloud one{scan.cloud.points, {}}, two = one;
-  {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    estimateNormals(one, 18);
-  }
-  {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    estimateNormals(two, 18);
-  }
+  estimateOnThreads(one, 1);
+  estimateOnThreads(two, 2);
   EXPECT_EQ(one.normals, two.normals);
 }
 
