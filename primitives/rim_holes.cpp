@@ -362,6 +362,16 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
   std::vector<WindowShape> windows;
   std::vector<std::uint32_t> near;
   std::vector<double> d2;
+  // The median radius of the empty circles (the distance map's maxima)
+  // around a gap, out to kPeakWindow of its radius; 0 below kMinPeaks of them.
+  const auto typicalGap = [&](const auto& beyond, double radius) {
+    std::vector<double> around;
+    for (const Peak& p : peaks) {
+      const double d = beyond(p.center);
+      if (d > spacing && d < (kPeakWindow - 1.0) * radius) around.push_back(p.radius);
+    }
+    return around.size() >= kMinPeaks ? median(std::move(around)) : 0.0;
+  };
   // The gap's rim: the points of `pool` (indices into flat) within two
   // spacings outside its outline (`beyond(q)`: how far q lies outside it).
   // The gap must be wide for their own spacing (a sparse patch has gaps of a
@@ -379,13 +389,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
       if (d2.size() == 2) gaps.push_back(std::sqrt(d2[1]));
     }
     if (gaps.empty() || radius < options.minRadiusSpacings * median(std::move(gaps))) return false;
-    std::vector<double> around;
-    for (const Peak& p : peaks) {
-      const double d = beyond(p.center);
-      if (d > spacing && d < (kPeakWindow - 1.0) * radius) around.push_back(p.radius);
-    }
-    return !(around.size() >= kMinPeaks &&
-             radius < options.minPeakRatio * median(std::move(around)));
+    return !(radius < options.minPeakRatio * typicalGap(beyond, radius));
   };
   // The points within epsilon of the face that do not face its way: the
   // strips along its edges where estimated normals blend, and the tops of
@@ -442,16 +446,26 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
                     [&](const WindowShape& t) { return t.outside(cand.center) < cand.radius; })) {
       continue;
     }
-    // The points around the circle (from the cells it reaches), then its
-    // centre fitted to them.
-    const double reach = cand.radius * (1.0 + options.roundness) + 2.0 * spacing;
+    // How ragged the rim may be: the sampling's typical empty circle around
+    // it, where the scanner's rows leave it wider than the spacing.
+    const double typical = typicalGap(
+        [&](const Vec2& q) { return (q - cand.center).norm() - cand.radius; }, cand.radius);
+    const double ragged =
+        std::max(options.roundnessSpacings * spacing, options.roundnessGaps * typical);
+    // The points around the circle (from the cells it reaches), out to two
+    // of the rows' gaps for the sectors, then its centre fitted to those
+    // within two spacings (farther out a circle fitted to a ring of rows
+    // wanders).
+    const double fitReach = cand.radius * (1.0 + options.roundness) + 2.0 * spacing;
+    const double reach = cand.radius * (1.0 + options.roundness) + 2.0 * std::max(spacing, typical);
     std::vector<std::size_t> band;
-    std::vector<std::uint32_t> bandPoints;  // scan indices
+    std::vector<std::uint32_t> bandPoints;  // scan indices, within fitReach
     grid.forEachNear(cand.center - Vec2::Constant(reach), cand.center + Vec2::Constant(reach),
                      [&](std::uint32_t k) {
-                       if ((flat[k].head<2>() - cand.center).norm() > reach) return;
+                       const double d = (flat[k].head<2>() - cand.center).norm();
+                       if (d > reach) return;
                        band.push_back(k);
-                       bandPoints.push_back(inliers[k]);
+                       if (d <= fitReach) bandPoints.push_back(inliers[k]);
                      });
     const Vec3 origin = plane->offset * plane->normal + cand.center.x() * u + cand.center.y() * v;
     Vec2 center = cand.center;
@@ -480,8 +494,7 @@ void findRims(const PointCloud& cloud, const DetectionResult& result,
     // (The nearest and the farthest sector left out: on a sparse rim one
     // sector may hold its nearest point a spacing or more out.)
     if (radius > maxRadius ||
-        sorted[kSectors - 2] - sorted[1] >
-            options.roundness * radius + options.roundnessSpacings * spacing) {
+        sorted[kSectors - 2] - sorted[1] > options.roundness * radius + ragged) {
       tryWindow(cand);
       continue;
     }

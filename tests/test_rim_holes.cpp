@@ -683,6 +683,61 @@ TEST(RimHoles, TheGapsOfAScannersRowsAreNoHoles) {
   EXPECT_LT(c->radius, 6.6);
 }
 
+TEST(RimHoles, AHoleBetweenAScannersRowsIsRoundForTheirGapsNotThePointsAlongThem) {
+  // Both faces sampled in rows along x, points 0.2 apart along a row, rows
+  // 2 apart (a scanner's rows lie farther apart than its points along
+  // them). A through hole of radius 4 whose centre lies 3.3 below a row:
+  // the first row beyond its top is 1.3 out, beyond its bottom 0.7, and
+  // along the rows the rim is within a spacing of the circle. Measured
+  // against the spacing along the rows (0.2 radius + half a spacing = 0.9)
+  // the rim is not round; against the typical empty circle between the
+  // rows (about 1) it is.
+  const Hole hole{1.0, -0.3, 4.0};
+  const auto rowFace = [&](FaceScan& scan, double z, const Vec3& normal) {
+    Surface surface;
+    surface.shape = PlaneSurface{normal, 2.0};
+    surface.rms = 0.01;
+    for (double y = -15.0; y <= 15.0 + 1e-9; y += 2.0) {
+      for (double x = -20.0; x <= 20.0 + 1e-9; x += 0.2) {
+        if (std::hypot(x - hole.x, y - hole.y) <= hole.r) continue;
+        surface.inliers.push_back(std::uint32_t(scan.cloud.size()));
+        scan.result.assignment.push_back(int(scan.result.surfaces.size()));
+        scan.cloud.points.emplace_back(x, y, z);
+        scan.cloud.normals.push_back(normal);
+      }
+    }
+    scan.result.surfaces.push_back(std::move(surface));
+  };
+  const auto scanned = [&] {
+    std::mt19937 rng(31);
+    FaceScan scan;
+    rowFace(scan, 2.0, Vec3::UnitZ());
+    rowFace(scan, -2.0, -Vec3::UnitZ());
+    sides(scan, 0.4, rng);
+    scan.finish();
+    return scan;
+  };
+  FaceScan rows = scanned();
+  const std::size_t before = rows.result.surfaces.size();
+  const RimHoleStats stats = addRimHoles(rows.cloud, rows.result);
+  EXPECT_EQ(stats.gaps, 2u);
+  ASSERT_EQ(stats.holes, 1u);
+  const auto* c = rows.result.surfaces[before].as<CylinderSurface>();
+  ASSERT_NE(c, nullptr);
+  EXPECT_GT(std::abs(c->axisDir.z()), 0.9999);
+  EXPECT_NEAR(c->axisPoint.x(), hole.x, 0.3);
+  EXPECT_NEAR(c->axisPoint.y(), hole.y, 0.6);
+  EXPECT_GT(c->radius, 3.9);
+  EXPECT_LT(c->radius, 4.8);
+  // Against the spacing along the rows alone the same rims are not round.
+  FaceScan alongRows = scanned();
+  RimHoleOptions spacingOnly;
+  spacingOnly.roundnessGaps = 0.0;
+  const RimHoleStats strict = addRimHoles(alongRows.cloud, alongRows.result, spacingOnly);
+  EXPECT_EQ(strict.gaps, 0u);
+  EXPECT_EQ(strict.holes, 0u);
+}
+
 TEST(RimHoles, TheMainJobFindsAHoleOfTheCountersunkPlateFromItsRimInItsScannerScan) {
   // The bundled scanner scan of the countersunk plate (raw x y z): the
   // scanner barely sees the walls of its small holes; a rim gives one.
