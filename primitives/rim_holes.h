@@ -31,16 +31,18 @@ struct RimHoleOptions {
   /// its length over its width; a square's by only 15 %: a square hole reads
   /// as a round one.
   double roundness = 0.2;
-  /// ... plus this many point spacings of the face (ratio), or this many
-  /// radii of the typical empty circle around the gap when that is more
-  /// (ratio): a scanner's rows lie farther apart than the points along a row
-  /// (which the spacing measures), so a rim between rows is ragged by about
-  /// the rows' half distance (the scanner scan of InverseCSG part 081: the
-  /// rims of its bolt holes, radius 0.16-0.19, ragged by 2.4-2.8 spacings,
-  /// the empty circles around them 1.7-1.9 spacings in radius). The points
-  /// of the sectors are gathered out to twice the larger of the two beyond
-  /// the circle.
+  /// ... plus this many point spacings of the face (ratio), or
+  /// roundnessGaps' share when that is more.
   double roundnessSpacings = 0.5;
+  /// ... or this many radii of the typical empty circle around the gap
+  /// (the median of the distance map's maxima used by minPeakRatio; ratio):
+  /// a scanner's rows lie farther apart than the points along a row (which
+  /// the spacing measures), so a rim that crosses the rows is ragged by up
+  /// to a row's distance (the scanner scan of InverseCSG part 081: the rims
+  /// of its bolt holes, radius 0.16-0.19, ragged by 2.4-2.8 spacings, the
+  /// empty circles around them 1.7-1.9 spacings in radius). The points of
+  /// the sectors are gathered out to twice the larger of the spacing and
+  /// that radius beyond the circle. 0: the spacing alone.
   double roundnessGaps = 1.0;
   /// A gap is a hole only when its radius is at least this many times the
   /// median radius of the empty circles among the face's points around it

@@ -45,11 +45,7 @@ struct FaceScan {
           for (int k = 0; k < 3; ++k) {
             if (normal[k] == 0.0) p[k] += jitter(rng);
           }
-          if (!keep(p)) continue;
-          surface.inliers.push_back(std::uint32_t(cloud.size()));
-          result.assignment.push_back(int(result.surfaces.size()));
-          cloud.points.push_back(p);
-          cloud.normals.push_back(normal);
+          if (keep(p)) point(surface, p, normal);
         }
       }
     }
@@ -65,6 +61,14 @@ struct FaceScan {
       loose(Vec3(cx + r * std::cos(a), cy + r * std::sin(a), z(rng)),
             Vec3(-std::cos(a), -std::sin(a), 0.0));
     }
+  }
+
+  // A point of `surface`, the next surface of the result (not added yet).
+  void point(Surface& surface, const Vec3& p, const Vec3& normal) {
+    surface.inliers.push_back(std::uint32_t(cloud.size()));
+    result.assignment.push_back(int(result.surfaces.size()));
+    cloud.points.push_back(p);
+    cloud.normals.push_back(normal);
   }
 
   // A point of no surface.
@@ -117,6 +121,19 @@ void plateWithSides(FaceScan& scan, const std::vector<Hole>& holes, double step,
                     std::mt19937& rng) {
   plate(scan, holes, step, rng);
   sides(scan, 0.4, rng);
+}
+
+// The surface at `index` is a hole cylinder whose axis passes within
+// toleranceX and toleranceY (along x and y) of `hole`'s centre, of radius in (rLo, rHi).
+void expectHole(const DetectionResult& result, std::size_t index, const Hole& hole,
+                double toleranceX, double toleranceY, double rLo, double rHi) {
+  ASSERT_LT(index, result.surfaces.size());
+  const auto* c = result.surfaces[index].as<CylinderSurface>();
+  ASSERT_NE(c, nullptr);
+  EXPECT_NEAR(c->axisPoint.x(), hole.x, toleranceX);
+  EXPECT_NEAR(c->axisPoint.y(), hole.y, toleranceY);
+  EXPECT_GT(c->radius, rLo);
+  EXPECT_LT(c->radius, rHi);
 }
 
 std::vector<const CylinderSurface*> holesOf(const DetectionResult& result, std::size_t from) {
@@ -616,12 +633,7 @@ TEST(RimHoles, TheFacesPointsNoSurfaceHoldsCloseARimBesideAnEdge) {
   const RimHoleStats found = addRimHoles(onFace.cloud, onFace.result);
   EXPECT_EQ(found.gaps, 2u);
   ASSERT_EQ(found.holes, 1u);
-  const auto* c = onFace.result.surfaces[before].as<CylinderSurface>();
-  ASSERT_NE(c, nullptr);
-  EXPECT_NEAR(c->axisPoint.x(), hole.x, 0.15);
-  EXPECT_NEAR(c->axisPoint.y(), hole.y, 0.15);
-  EXPECT_GT(c->radius, 1.45);
-  EXPECT_LT(c->radius, 1.8);
+  expectHole(onFace.result, before, hole, 0.15, 0.15, 1.45, 1.8);
   FaceScan raised = scanWith(0.5);
   const RimHoleStats none = addRimHoles(raised.cloud, raised.result);
   EXPECT_EQ(none.gaps, 0u);
@@ -640,11 +652,7 @@ TEST(RimHoles, TheGapsOfAScannersRowsAreNoHoles) {
     surface.shape = PlaneSurface{normal, 2.0};
     surface.rms = 0.01;
     const auto add = [&](double x, double y) {
-      if (std::hypot(x - hole.x, y - hole.y) <= hole.r) return;
-      surface.inliers.push_back(std::uint32_t(scan.cloud.size()));
-      scan.result.assignment.push_back(int(scan.result.surfaces.size()));
-      scan.cloud.points.emplace_back(x, y, z);
-      scan.cloud.normals.push_back(normal);
+      if (std::hypot(x - hole.x, y - hole.y) > hole.r) scan.point(surface, Vec3(x, y, z), normal);
     };
     for (double x = -20.0; x <= 20.0 + 1e-9; x += 2.0) {
       for (double y = -15.0; y <= 15.0 + 1e-9; y += 0.2) add(x, y);
@@ -675,12 +683,7 @@ TEST(RimHoles, TheGapsOfAScannersRowsAreNoHoles) {
   FaceScan holed = scanWith(hole);
   const std::size_t before = holed.result.surfaces.size();
   ASSERT_EQ(addRimHoles(holed.cloud, holed.result).holes, 1u);
-  const auto* c = holed.result.surfaces[before].as<CylinderSurface>();
-  ASSERT_NE(c, nullptr);
-  EXPECT_NEAR(c->axisPoint.x(), hole.x, 0.3);
-  EXPECT_NEAR(c->axisPoint.y(), hole.y, 0.3);
-  EXPECT_GT(c->radius, 5.9);
-  EXPECT_LT(c->radius, 6.6);
+  expectHole(holed.result, before, hole, 0.3, 0.3, 5.9, 6.6);
 }
 
 TEST(RimHoles, AHoleBetweenAScannersRowsIsRoundForTheirGapsNotThePointsAlongThem) {
@@ -699,11 +702,7 @@ TEST(RimHoles, AHoleBetweenAScannersRowsIsRoundForTheirGapsNotThePointsAlongThem
     surface.rms = 0.01;
     for (double y = -15.0; y <= 15.0 + 1e-9; y += 2.0) {
       for (double x = -20.0; x <= 20.0 + 1e-9; x += 0.2) {
-        if (std::hypot(x - hole.x, y - hole.y) <= hole.r) continue;
-        surface.inliers.push_back(std::uint32_t(scan.cloud.size()));
-        scan.result.assignment.push_back(int(scan.result.surfaces.size()));
-        scan.cloud.points.emplace_back(x, y, z);
-        scan.cloud.normals.push_back(normal);
+        if (std::hypot(x - hole.x, y - hole.y) > hole.r) scan.point(surface, Vec3(x, y, z), normal);
       }
     }
     scan.result.surfaces.push_back(std::move(surface));
@@ -725,10 +724,7 @@ TEST(RimHoles, AHoleBetweenAScannersRowsIsRoundForTheirGapsNotThePointsAlongThem
   const auto* c = rows.result.surfaces[before].as<CylinderSurface>();
   ASSERT_NE(c, nullptr);
   EXPECT_GT(std::abs(c->axisDir.z()), 0.9999);
-  EXPECT_NEAR(c->axisPoint.x(), hole.x, 0.3);
-  EXPECT_NEAR(c->axisPoint.y(), hole.y, 0.6);
-  EXPECT_GT(c->radius, 3.9);
-  EXPECT_LT(c->radius, 4.8);
+  expectHole(rows.result, before, hole, 0.3, 0.6, 3.9, 4.8);
   // Against the spacing along the rows alone the same rims are not round.
   FaceScan alongRows = scanned();
   RimHoleOptions spacingOnly;
