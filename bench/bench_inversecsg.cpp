@@ -338,6 +338,10 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     if (rec.boreOpening.voxels > 0) {
       res.note += ", " + std::to_string(rec.boreOpening.voxels) + " voxels opened in bores";
     }
+    if (const auto* hy = std::get_if<HybridMethodResult>(&rec.result);
+        hy != nullptr && hy->repair.holesAdded > 0) {
+      res.note += ", " + std::to_string(hy->repair.holesAdded) + " seen holes subtracted";
+    }
     if (rec.timeLimitHit) res.note += " (time limit hit)";
     if (!rec.ok()) return res;
     if (!keep.empty()) writeTreeJson(keep / "tree.json", rec.tree);

@@ -131,6 +131,7 @@ Json repairJson(const HybridResult& h) {
   return {{"bad_points", h.badPoints},
           {"regions", std::move(regions)},
           {"subtrees_replaced", h.replaced},
+          {"holes_added", h.holesAdded},
           {"fitness_before", h.before.total},
           {"fitness_after", h.after.total},
           {"primitives_before", h.primitivesBefore},

@@ -592,6 +592,68 @@ const SetOperations& setOperations(const FitnessOptions& fitness, const SardfOpe
                                                              : minMaxOperations();
 }
 
+
+// A cylinder of the tree that stands for `c`: axes parallel within 8°, the
+// axes within a third of c's radius of each other, radii within a quarter.
+bool sameCylinder(const Cylinder& t, const Cylinder& c) {
+  if (std::abs(t.axis.dot(c.axis)) < std::cos(8.0 * std::numbers::pi / 180.0)) return false;
+  const Vec3 d = t.center - c.center;
+  return (d - d.dot(c.axis) * c.axis).norm() < c.radius / 3.0 &&
+         std::abs(t.radius - c.radius) < 0.25 * c.radius;
+}
+
+// The holes the detection saw that the tree lacks: each bounded cylinder
+// fitted to a detected surface (a Quadric candidate) that no cylinder of the
+// tree stands for is subtracted from the whole tree, best supported first,
+// and kept when the tree's fitness on all points rises and its voxel term
+// does not get worse. A hole one or two voxels wide, whose rims and a little
+// of whose wall the scan shows, raises the fitness by less than minGain·N (a
+// region's worth of points), and the labels hold too few of its voxels
+// empty for the voxel stage to cut it.
+void addSeenHoles(const PointCloud& scan, std::span<const Candidate> candidates,
+                  const VoxelGrid& grid, const VoxelSet& inside, const HybridOptions& options,
+                  HybridResult& out) {
+  std::vector<Cylinder> have;
+  for (const Node* leaf : out.tree.leaves())
+    if (const auto* c = leaf->primitive.as<Cylinder>()) have.push_back(*c);
+  std::vector<const Candidate*> holes;
+  for (const Candidate& c : candidates) {
+    if (c.origin != CandidateOrigin::Quadric || c.tree.empty() ||
+        c.tree.root()->kind != NodeKind::Primitive)
+      continue;
+    const auto* cylinder = c.tree.root()->primitive.as<Cylinder>();
+    if (cylinder == nullptr) continue;
+    if (std::none_of(have.begin(), have.end(),
+                     [&](const Cylinder& t) { return sameCylinder(t, *cylinder); }))
+      holes.push_back(&c);
+  }
+  if (holes.empty()) return;
+  std::stable_sort(holes.begin(), holes.end(), [](const Candidate* a, const Candidate* b) {
+    return a->support > b->support;
+  });
+  std::vector<CsgTree> all = {out.tree};
+  for (const Candidate* h : holes) all.push_back(h->tree);
+  const PrimitiveLibrary library = PrimitiveLibrary::ofTree(uniteAll(all));
+  const VoxelTarget target{grid, inside};
+  const FitnessModel model(scan.points, scan.normals, scan.diagonal(), library, options.fitness,
+                           options.fitness.voxelWeight > 0.0 ? &target : nullptr);
+  std::vector<CsgTree> operands = {out.tree};
+  Fitness best = model.evaluate(library.adopt(out.tree));
+  for (const Candidate* h : holes) {
+    operands.push_back(h->tree);
+    const CsgTree trial = library.adopt(CsgTree::subtract(operands));
+    const Fitness f = model.evaluate(trial);
+    if (f.total > best.total && f.voxelPenalty <= best.voxelPenalty) {
+      best = f;
+      ++out.holesAdded;
+    } else {
+      operands.pop_back();
+    }
+  }
+  if (out.holesAdded == 0) return;
+  out.tree = library.adopt(normalizeTree(CsgTree::subtract(operands)));
+  out.after = model.evaluate(out.tree);
+}
 }  // namespace
 
 const char* regionVerdictName(RegionVerdict verdict) {
@@ -692,15 +754,17 @@ HybridResult repairTree(const PointCloud& scan, const CsgTree& tree,
     // Nothing the points paid for: the voxel tree, as it was (its own stage
     // already removed what changes no voxel).
     out.after = out.before;
-    return out;
+  } else {
+    out.tree = library.adopt(assemble(-1));
+    // Redundancy removal evaluates the tree once per node and operand on all
+    // points: skipped once the time limit is spent (or the work cancelled).
+    if (!control.shouldStop()) {
+      out.tree = removeRedundancy(out.tree, model);
+    }
+    out.after = model.evaluate(out.tree);
   }
-  out.tree = library.adopt(assemble(-1));
-  // Redundancy removal evaluates the tree once per node and operand on all
-  // points: skipped once the time limit is spent (or the work cancelled).
-  if (!control.shouldStop()) {
-    out.tree = removeRedundancy(out.tree, model);
-  }
-  out.after = model.evaluate(out.tree);
+  if (options.seenHoles && !control.shouldStop())
+    addSeenHoles(scan, candidates, grid, inside, options, out);
   out.primitivesAfter = out.tree.primitiveCount();
   return out;
 }

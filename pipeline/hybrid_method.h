@@ -24,7 +24,9 @@
 /// inside A), and of the points the boundary it adds where the scan has no points would hold at the
 /// scan's density (a fitness at the points cannot see such surfaces: a slab carved inside a plate,
 /// thinner than a voxel); so the result is never worse than the voxel tree by that measure. Last,
-/// when a subtree was replaced, redundant nodes of the whole tree are removed. When none was, the
+/// when a subtree was replaced, redundant nodes of the whole tree are removed. Then the holes the
+/// detection saw that the tree lacks are subtracted where the fitness rises and the voxel term
+/// does not get worse (HybridOptions::seenHoles). When nothing was replaced or subtracted, the
 /// result is the input tree itself.
 
 #include <algorithm>
@@ -81,6 +83,12 @@ struct HybridOptions {
                                 ///< run in parallel; the one with the best fitness on the region's
                                 ///< points is judged (one search finds a repair that another
                                 ///< misses; the first search is the one a single search runs)
+  /// Last, each bounded cylinder fitted to a detected surface that no
+  /// cylinder of the tree stands for is subtracted from the whole tree (best
+  /// supported first) and kept when the tree's fitness rises and its voxel
+  /// term does not get worse: the holes a scan shows by their rims and a
+  /// little wall, too narrow for the labels and worth less than minGain·N.
+  bool seenHoles = true;
 };
 
 /// What became of a region's refined subtree.
@@ -135,6 +143,7 @@ struct HybridResult {
   std::size_t primitivesBefore = 0;
   std::size_t primitivesAfter = 0;
   std::size_t replaced = 0;        ///< regions whose subtree was replaced
+  std::size_t holesAdded = 0;      ///< seen holes subtracted last (HybridOptions::seenHoles)
   std::size_t ghostBefore = 0;     ///< points the input tree explains only by a ghost surface
   std::size_t ghostAfter = 0;      ///< the result's
   double area = 0.0;               ///< the input tree's boundary area (scan units²)

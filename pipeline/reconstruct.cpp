@@ -185,11 +185,12 @@ void hybridMethod(Reconstruction& out, HybridMethodResult& hy, const PointCloud&
   hy.repair = repairTree(scan, out.tree, out.hypotheses.candidates, out.grid, out.labels.inside, ho,
                          control);
   const HybridResult& h = hy.repair;
-  char summary[200];
+  char summary[240];
   std::snprintf(summary, sizeof(summary),
-                "%zu badly explained points, %zu regions, %zu subtrees replaced, fitness %.6g -> "
-                "%.6g, primitives %zu -> %zu",
-                h.badPoints, h.regions.size(), h.replaced, h.before.total, h.after.total,
+                "%zu badly explained points, %zu regions, %zu subtrees replaced, %zu seen holes "
+                "subtracted, fitness %.6g -> %.6g, primitives %zu -> %zu",
+                h.badPoints, h.regions.size(), h.replaced, h.holesAdded, h.before.total,
+                h.after.total,
                 h.primitivesBefore, h.primitivesAfter);
   clock.finish(summary);
   out.tree = h.tree;

@@ -244,6 +244,65 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
   EXPECT_EQ(one.after.total, two.after.total);
 }
 
+// A plate 6 thick with a through hole 1 across (1.5 voxels) of which the
+// scan holds the rims and an eighth of the wall's points, as a scanner sees
+// a small bore; the labels see through it, the voxel stage's tree is the
+// plate alone. Its points are too few for a region and raise the fitness by
+// less than minGain·N, so only the last pass (seenHoles) subtracts it; a
+// cylinder candidate where the plate is solid, and one the tree already
+// has, are not subtracted.
+TEST(Hybrid, SubtractsAHoleTheScanShowsByItsRimsAndALittleWall) {
+  const Box plate{Vec3::Zero(), Mat3::Identity(), Vec3(20, 12, 3)};
+  const Cylinder hole{Vec3(6, 3, 0), Vec3::UnitZ(), 0.5, 6.0};
+  const Cylinder solid{Vec3(-8, -4, 0), Vec3::UnitZ(), 0.5, 6.0};
+  const CsgTree truth =
+      CsgTree::subtract({CsgTree::leaf(plate, "plate"), CsgTree::leaf(hole, "hole")});
+  const CsgTree voxelTree = CsgTree::leaf(plate, "plate");
+  SampleOptions so;
+  so.points = 30000;
+  const SurfaceSample sample = sampleSurface(truth, so);
+  PointCloud scan;
+  std::size_t wall = 0;
+  for (std::size_t i = 0; i < sample.cloud.size(); ++i) {
+    if (sample.source[i] == 1 && wall++ % 8 != 0) continue;
+    scan.points.push_back(sample.cloud.points[i]);
+    scan.normals.push_back(sample.cloud.normals[i]);
+  }
+  const VoxelGrid grid =
+      VoxelGrid::around(OrientedBox{Vec3::Zero(), Mat3::Identity(), Vec3(20, 12, 3)});
+  ASSERT_GT(2.0 * hole.radius, grid.voxelSize());
+  ASSERT_LT(2.0 * hole.radius, 2.0 * grid.voxelSize());
+  const VoxelSet inside = solidVoxels(truth, grid);
+  std::vector<Candidate> candidates;
+  for (const auto& [shape, name] :
+       {std::pair{Primitive(plate), "plate"}, {Primitive(hole), "hole"}, {Primitive(solid), "solid"}}) {
+    Candidate c;
+    c.tree = CsgTree::leaf(shape, name);
+    c.origin = shape.as<Box>() ? CandidateOrigin::Cuboid : CandidateOrigin::Quadric;
+    candidates.push_back(c);
+  }
+
+  const HybridResult r = repairTree(scan, voxelTree, candidates, grid, inside);
+  EXPECT_EQ(r.replaced, 0u);
+  EXPECT_EQ(r.holesAdded, 1u);
+  EXPECT_EQ(r.primitivesAfter, 2u) << treeNodeJson(r.tree);
+  EXPECT_TRUE(r.tree.structurallyEqual(truth)) << treeNodeJson(r.tree);
+  EXPECT_GT(r.after.total, r.before.total);
+  HybridOptions minGainTest;
+  EXPECT_LT(r.after.total - r.before.total, minGainTest.minGain * double(scan.size()));
+
+  HybridOptions off;
+  off.seenHoles = false;
+  const HybridResult without = repairTree(scan, voxelTree, candidates, grid, inside, off);
+  EXPECT_EQ(without.holesAdded, 0u);
+  EXPECT_TRUE(without.tree.structurallyEqual(voxelTree)) << treeNodeJson(without.tree);
+
+  // The tree that has the hole gains nothing more.
+  const HybridResult again = repairTree(scan, truth, candidates, grid, inside);
+  EXPECT_EQ(again.holesAdded, 0u);
+  EXPECT_TRUE(again.tree.structurallyEqual(truth)) << treeNodeJson(again.tree);
+}
+
 // The slot case with a second slot beside the first, both candidates: the
 // seeds of a search hold one slot each, and a short search may or may not
 // combine them, depending on its seed.
@@ -426,6 +485,8 @@ TEST_F(Cli, HybridIsTheDefaultAndReportsItsRepair) {
     EXPECT_EQ(region["search_fitness"][0], region["fitness_after"]);
   }
   EXPECT_EQ(r["subtrees_replaced"].get<std::size_t>(), replaced);
+  // The flange's bolt holes are all in the voxel tree: no seen hole to add.
+  EXPECT_EQ(r["holes_added"].get<std::size_t>(), 0u);
 }
 
 }  // namespace
