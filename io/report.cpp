@@ -106,6 +106,7 @@ nlohmann::ordered_json surfacesJson(const std::string& scanName, const Detection
   j["scan"] = scanName;
   j["diagonal"] = detection.diagonal;
   j["noise"] = detection.noise;
+  j["normal_noise"] = detection.normalNoise;
   j["epsilon"] = detection.epsilon;
   j["surfaces"] = std::move(surfaces);
   return j;

@@ -145,7 +145,10 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   SurfaceFitOptions fit;
   if (det.searchedPoints < scan.size()) fit.removeRedundant = fit.splitSteps = fit.reassign = false;
   fitSurfaces(scan, out.detection, fit);
-  if (options.wallBores && options.detect.estimatedNormals) {
+  // A raw scan: normals estimated from the points, or given by a scanner
+  // (noisy, measured on the first surfaces), not a sample's exact ones.
+  const bool raw = options.detect.estimatedNormals || det.normalNoise > options.scannerNormalNoise;
+  if (options.wallBores && raw) {
     WallBoreOptions wo = options.wallBoreOptions;
     wo.seed = options.seed;
     out.wallBores = addWallBores(scan, out.detection, wo);
@@ -154,7 +157,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
                                (out.wallBores.bores == 1 ? "" : "s") + " found from their walls";
     }
   }
-  if (options.sheetRounds && options.detect.estimatedNormals) {
+  if (options.sheetRounds && raw) {
     out.sheetRounds = replaceSheetRounds(scan, out.detection, options.sheetRoundOptions);
     const std::size_t edges =
         out.sheetRounds.tori + out.sheetRounds.cylinders + out.sheetRounds.corners;
@@ -168,7 +171,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
                                " taken for a thin sheet's square edge";
     }
   }
-  if (options.rimHoles && options.detect.estimatedNormals) {
+  if (options.rimHoles && raw) {
     out.rimHoles = addRimHoles(scan, out.detection, options.rimHoleOptions);
     if (out.rimHoles.holes > 0) {
       out.detection.message += "; " + std::to_string(out.rimHoles.holes) + " hole" +

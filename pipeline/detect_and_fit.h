@@ -56,18 +56,26 @@ struct DetectAndFitOptions {
   /// Bytes the voxel stage may use (0: no limit): a finer grid that would
   /// need more (voxelStageBytes) falls back to `resolution`.
   std::size_t memoryLimit = 0;
-  /// With normals estimated from raw points (detect.estimatedNormals), a
+  /// The raw-scan stages below run when the normals were estimated from raw
+  /// points (detect.estimatedNormals) or are a scanner's: given normals
+  /// whose noise on the first surfaces found (DetectionResult::normalNoise)
+  /// exceeds this many radians. A uniform sample's exact normals read at most
+  /// 0.0005 (the bundled scans, noisy ones too), a scanner's from its range
+  /// image 0.022-0.026 and estimated ones about 0.017 (the bundled parts'
+  /// scanner scans).
+  double scannerNormalNoise = 0.005;
+  /// On a raw scan, a
   /// round gap in a plane's points that no curved surface explains becomes a
   /// hole cylinder (addRimHoles): a scanner sees little of a small bore's
   /// wall, and the face around it shows the hole.
   bool rimHoles = true;
   RimHoleOptions rimHoleOptions;  ///< their parameters
-  /// With normals estimated from raw points, the points no surface took are
+  /// On a raw scan, the points no surface took are
   /// searched for the walls of bores and bosses along the part's directions
   /// (addWallBores; before the rims): RANSAC overlooks many small ones.
   bool wallBores = true;
   WallBoreOptions wallBoreOptions;  ///< their parameters (the seed is the job's)
-  /// With normals estimated from raw points, the rounds that are a thin
+  /// On a raw scan, the rounds that are a thin
   /// sheet's square edges blended by the normals (replaceSheetRounds; before
   /// the rims, whose holes a torus along the rim would hide) are dropped or
   /// made end faces.

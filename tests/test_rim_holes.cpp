@@ -18,6 +18,8 @@
 #include "main_job_pair.h"
 #include "part_list.h"
 #include "pipeline/detect_and_fit.h"
+#include "scanner/scanner.h"
+#include "scanner/tree_caster.h"
 #include "pipeline/reconstruct.h"
 #include "primitives/rim_holes.h"
 #include "test_helpers.h"
@@ -763,6 +765,39 @@ TEST(RimHoles, TheMainJobFindsAHoleOfTheCountersunkPlateFromItsRimInItsScannerSc
   ASSERT_TRUE(without.ok());
   EXPECT_EQ(without.rimHoles.holes, 0u);
   EXPECT_EQ(holesAlongZ(with), holesAlongZ(without) + with.rimHoles.holes);
+}
+
+TEST(RimHoles, AScannersOwnNormalsMakeARawScanTooAndASamplesExactOnesDoNot) {
+  // The countersunk plate scanned with the scanner's normals (noisy, from
+  // its range image): read from a file they are given, not estimated, yet
+  // the scan is as raw as without them, and the raw-scan stages (the search
+  // of the walls along the part's directions, the rims) must run on it. The
+  // plate's uniform scan, whose normals are exact, stays a sample.
+  const CsgTree truth = readTreeJson(test::dataDir() / "countersunk_plate" / "tree.json");
+  const TreeCaster caster(truth);
+  ScannerOptions so;
+  so.normals = ScannerNormals::Scanner;
+  so.points = 20000;
+  const PointCloud scanned = scanPart(caster, so).cloud;
+  ASSERT_TRUE(scanned.hasNormals());
+  DetectAndFitOptions options;  // detect.estimatedNormals false: the normals were given
+  const SurfacesAndCandidates raw = detectAndFit(scanned, options);
+  ASSERT_TRUE(raw.ok()) << raw.detection.message;
+  EXPECT_GT(raw.detection.normalNoise, options.scannerNormalNoise);
+  EXPECT_GT(raw.wallBores.directions, 0u) << raw.detection.message;
+  // Taken for exact normals, the same scan skips those stages.
+  DetectAndFitOptions exact = options;
+  exact.scannerNormalNoise = 1.0;
+  const SurfacesAndCandidates sample = detectAndFit(scanned, exact);
+  ASSERT_TRUE(sample.ok());
+  EXPECT_EQ(sample.wallBores.directions, 0u);
+
+  const Scan uniform = readScan(test::dataDir() / "countersunk_plate" / "scan.ply");
+  ASSERT_FALSE(uniform.info.normalsEstimated);
+  const SurfacesAndCandidates given = detectAndFit(uniform.cloud, options);
+  ASSERT_TRUE(given.ok());
+  EXPECT_LT(given.detection.normalNoise, 0.1 * options.scannerNormalNoise);
+  EXPECT_EQ(given.wallBores.directions, 0u);
 }
 
 TEST(RimHoles, TheMainJobCutsTheWindowOfTheSheetBracketFromItsRimsInItsScannerScan) {
