@@ -326,6 +326,9 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     if (rec.boresFromWalls > 0) {
       res.note += ", " + std::to_string(rec.boresFromWalls) + " bores from their walls";
     }
+    if (rec.facesFromPoints > 0) {
+      res.note += ", " + std::to_string(rec.facesFromPoints) + " faces from their points";
+    }
     if (rec.holesFromRims > 0) {
       res.note += ", " + std::to_string(rec.holesFromRims) + " holes from their rims";
     }

@@ -91,6 +91,7 @@ Json voxelCounts(const Reconstruction& rec, const Construction& c) {
           {"windows_from_rims", rec.rimWindows},
           {"sheet_edges_from_rounds", rec.sheetEdges},
           {"bores_from_walls", rec.boresFromWalls},
+          {"faces_from_points", rec.facesFromPoints},
           {"points_after_detection", rec.pointsAfterDetection},
           {"unseen_face_points", rec.unseenFacePoints},
           {"bores_seen", rec.boreOpening.bores},

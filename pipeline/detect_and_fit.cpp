@@ -157,6 +157,14 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
                                (out.wallBores.bores == 1 ? "" : "s") + " found from their walls";
     }
   }
+  if (options.wallPlanes && raw) {
+    out.wallPlanes = addWallPlanes(scan, out.detection, options.wallPlaneOptions);
+    if (out.wallPlanes.planes > 0) {
+      out.detection.message += "; " + std::to_string(out.wallPlanes.planes) + " face" +
+                               (out.wallPlanes.planes == 1 ? "" : "s") +
+                               " found from their points";
+    }
+  }
   if (options.sheetRounds && raw) {
     out.sheetRounds = replaceSheetRounds(scan, out.detection, options.sheetRoundOptions);
     const std::size_t edges =

@@ -75,6 +75,12 @@ struct DetectAndFitOptions {
   /// (addWallBores; before the rims): RANSAC overlooks many small ones.
   bool wallBores = true;
   WallBoreOptions wallBoreOptions;  ///< their parameters (the seed is the job's)
+  /// On a raw scan, after the bores, the points no surface took are searched
+  /// for narrow faces across the part's directions (addWallPlanes): a
+  /// groove's wall a voxel or two wide, whose normals the neighbourhoods
+  /// blend with the faces beside it.
+  bool wallPlanes = true;
+  WallPlaneOptions wallPlaneOptions;  ///< their parameters
   /// On a raw scan, the rounds that are a thin
   /// sheet's square edges blended by the normals (replaceSheetRounds; before
   /// the rims, whose holes a torus along the rim would hide) are dropped or
@@ -97,6 +103,7 @@ struct SurfacesAndCandidates {
   std::vector<ThinFeature> thin;        ///< features thinner than thinVoxels at the asked one
   RimHoleStats rimHoles;                ///< holes found from their rims (rimHoles)
   WallBoreStats wallBores;              ///< bores found from their walls (wallBores)
+  WallPlaneStats wallPlanes;            ///< faces found from their points (wallPlanes)
   SheetRoundStats sheetRounds;          ///< a thin sheet's edges read as rounds (sheetRounds)
   double detectSeconds = 0.0;           ///< RANSAC
   double fitSeconds = 0.0;              ///< the surface fit (Ceres)

@@ -255,6 +255,7 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   out.sheetEdges = found.sheetRounds.tori + found.sheetRounds.cylinders +
                    found.sheetRounds.corners + found.sheetRounds.tilted;
   out.boresFromWalls = found.wallBores.bores;
+  out.facesFromPoints = found.wallPlanes.planes;
   out.timeLimitHit = control.pastDeadline();
   if (!fitsInMemory(out, options)) return out;
   if (control.cancelled()) return cancelledAfter(std::move(out), "hypotheses");

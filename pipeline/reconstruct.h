@@ -156,6 +156,7 @@ struct Reconstruction {
   std::size_t holesFromRims = 0;   ///< hole cylinders found from their rims (raw scans)
   std::size_t rimWindows = 0;      ///< windows found from their rims (raw scans)
   std::size_t boresFromWalls = 0;  ///< bore and boss cylinders found from their walls (raw scans)
+  std::size_t facesFromPoints = 0;  ///< narrow faces found from their points (raw scans)
   /// Rounds that were a thin sheet's square edges: tori dropped, cylinders
   /// made end faces (raw scans; primitives/sheet_rounds.h).
   std::size_t sheetEdges = 0;

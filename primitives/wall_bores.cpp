@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/nearest_neighbors.h"
+#include "core/union_find.h"
 #include "primitives/surface_fit.h"
 
 namespace csgvox {
@@ -286,6 +287,70 @@ bool duplicates(const std::vector<Surface>& surfaces, const Vec3& point, const V
   return false;
 }
 
+
+// Free points that a surface found explains lie on it (left out of its
+// patch, or a strip of normals blended at its edge), not on a wall of
+// their own.
+std::vector<char> explainedFreePoints(const PointCloud& cloud, const DetectionResult& result) {
+  std::vector<char> explained(cloud.size(), 0);
+  tbb::parallel_for(std::size_t{0}, cloud.size(), [&](std::size_t i) {
+    if (result.assignment[i] >= 0) return;
+    for (const Surface& surface : result.surfaces) {
+      if (surfaceDistance(surface, cloud.points[i]) <= result.epsilon &&
+          std::abs(surfaceNormal(surface, cloud.points[i]).dot(cloud.normals[i])) >=
+              kCrossingCosine) {
+        explained[i] = 1;
+        return;
+      }
+    }
+  });
+  return explained;
+}
+
+// The largest set of `points` linked by steps shorter than `link` (between
+// each point and its 16 nearest), as indices into `points`.
+std::vector<std::uint32_t> largestCluster(const std::vector<Vec3>& points, double link) {
+  if (points.empty()) return {};
+  const NearestNeighbors nn(points);
+  std::vector<std::uint32_t> parent(points.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  std::vector<std::uint32_t> near;
+  std::vector<double> d2;
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    nn.kNearest(points[i], kPairNeighbours + 1, near, &d2);
+    for (std::size_t k = 0; k < near.size(); ++k) {
+      if (d2[k] > link * link) break;
+      const std::uint32_t a = findRoot(parent, i), b = findRoot(parent, near[k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  std::vector<std::uint32_t> size(points.size(), 0);
+  for (std::uint32_t i = 0; i < points.size(); ++i) ++size[findRoot(parent, i)];
+  const std::uint32_t root =
+      std::uint32_t(std::max_element(size.begin(), size.end()) - size.begin());
+  std::vector<std::uint32_t> members;
+  for (std::uint32_t i = 0; i < points.size(); ++i)
+    if (findRoot(parent, i) == root) members.push_back(i);
+  return members;
+}
+
+// The median distance from each of `points` to its nearest other point.
+double medianSpacing(const std::vector<Vec3>& points) {
+  if (points.size() < 2) return 0.0;
+  const NearestNeighbors nn(points);
+  std::vector<std::uint32_t> near;
+  std::vector<double> d2;
+  std::vector<double> spacing;
+  spacing.reserve(points.size());
+  for (const Vec3& p : points) {
+    nn.kNearest(p, 2, near, &d2);
+    spacing.push_back(std::sqrt(d2.back()));
+  }
+  std::nth_element(spacing.begin(), spacing.begin() + std::ptrdiff_t(spacing.size() / 2),
+                   spacing.end());
+  return spacing[spacing.size() / 2];
+}
+
 }  // namespace
 
 WallBoreStats addWallBores(const PointCloud& cloud, DetectionResult& result,
@@ -304,21 +369,7 @@ WallBoreStats addWallBores(const PointCloud& cloud, DetectionResult& result,
   const double link = std::max(result.clusterEpsilon, eps);
   if (!(eps > 0.0) || !(rMax > rMin)) return stats;
 
-  // Free points that a surface found explains lie on it (left out of its
-  // patch, or a strip of normals blended at its edge), not on a wall of
-  // their own.
-  std::vector<char> explained(cloud.size(), 0);
-  tbb::parallel_for(std::size_t{0}, cloud.size(), [&](std::size_t i) {
-    if (result.assignment[i] >= 0) return;
-    for (const Surface& surface : result.surfaces) {
-      if (surfaceDistance(surface, cloud.points[i]) <= eps &&
-          std::abs(surfaceNormal(surface, cloud.points[i]).dot(cloud.normals[i])) >=
-              kCrossingCosine) {
-        explained[i] = 1;
-        return;
-      }
-    }
-  });
+  const std::vector<char> explained = explainedFreePoints(cloud, result);
   std::vector<Direction> directions = partDirections(result.surfaces);
   if (directions.size() > options.maxDirections) directions.resize(options.maxDirections);
   std::mt19937_64 rng(options.seed);
@@ -439,6 +490,107 @@ WallBoreStats addWallBores(const PointCloud& cloud, DetectionResult& result,
       result.surfaces.push_back(std::move(bore));
       markTaken(on);
       ++stats.bores;
+    }
+  }
+  return stats;
+}
+
+// A face's points are those whose normals lie within 60 degrees of it:
+// normals blended across a narrow face's edges by the neighbourhoods.
+constexpr double kFaceCosine = 0.5;
+
+WallPlaneStats addWallPlanes(const PointCloud& cloud, DetectionResult& result,
+                             const WallPlaneOptions& options) {
+  WallPlaneStats stats;
+  if (!result.ok() || cloud.size() != result.assignment.size() || !cloud.hasNormals()) {
+    return stats;
+  }
+  const double eps = result.epsilon;
+  const std::size_t least = std::max<std::size_t>(result.minPoints, 3);
+  const double link = std::max(result.clusterEpsilon, eps);
+  if (!(eps > 0.0)) return stats;
+  const std::vector<char> explained = explainedFreePoints(cloud, result);
+  std::vector<Direction> directions = partDirections(result.surfaces);
+  if (directions.size() > options.maxDirections) directions.resize(options.maxDirections);
+  for (const Direction& dir : directions) {
+    for (const double side : {1.0, -1.0}) {
+      if (stats.planes >= options.maxPlanes) break;
+      ++stats.directions;
+      // The points of the windows tried along this side, whatever the
+      // verdict (a face added takes its points from the others too).
+      std::vector<char> taken(cloud.size(), 0);
+      const Vec3 normal = side * dir.d;
+      // The free points facing along `normal`, by their position along it.
+      std::vector<std::pair<double, std::uint32_t>> along;
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (result.assignment[i] >= 0 || explained[i]) continue;
+        if (cloud.normals[i].dot(normal) < kFaceCosine) continue;
+        along.emplace_back(cloud.points[i].dot(normal), std::uint32_t(i));
+      }
+      std::sort(along.begin(), along.end());
+      for (;;) {
+        if (stats.planes >= options.maxPlanes) break;
+        // The densest window 2 epsilon wide among the points not yet taken.
+        std::size_t bestLo = 0, bestCount = 0;
+        for (std::size_t lo = 0, hi = 0; lo < along.size(); ++lo) {
+          if (taken[along[lo].second]) continue;
+          hi = std::max(hi, lo);
+          while (hi < along.size() && along[hi].first <= along[lo].first + 2.0 * eps) ++hi;
+          std::size_t count = 0;
+          for (std::size_t k = lo; k < hi; ++k) count += taken[along[k].second] ? 0 : 1;
+          if (count > bestCount) bestCount = count, bestLo = lo;
+        }
+        if (bestCount < least) break;
+        std::vector<std::uint32_t> window;
+        for (std::size_t k = bestLo;
+             k < along.size() && along[k].first <= along[bestLo].first + 2.0 * eps; ++k) {
+          if (!taken[along[k].second]) window.push_back(along[k].second);
+        }
+        ++stats.tried;
+        for (std::uint32_t i : window) taken[i] = 1;
+        // Its largest connected patch.
+        std::vector<Vec3> positions;
+        for (std::uint32_t i : window) positions.push_back(cloud.points[i]);
+        const std::vector<std::uint32_t> patch =
+            largestCluster(positions, std::max(link, options.spacingFactor * medianSpacing(positions)));
+        if (patch.size() < least) continue;
+        std::vector<std::uint32_t> inliers;
+        std::vector<double> t;
+        for (std::uint32_t k : patch) {
+          inliers.push_back(window[k]);
+          t.push_back(cloud.points[window[k]].dot(normal));
+        }
+        std::nth_element(t.begin(), t.begin() + std::ptrdiff_t(t.size() / 2), t.end());
+        const double offset = t[t.size() / 2];
+        // Not a plane found already (a face's other patch, or its edge's
+        // points a little off it).
+        const bool known = std::any_of(
+            result.surfaces.begin(), result.surfaces.end(), [&](const Surface& s) {
+              const auto* plane = s.as<PlaneSurface>();
+              return plane != nullptr && plane->normal.dot(normal) > kSameDirection &&
+                     std::abs(plane->offset - offset) < 2.0 * eps;
+            });
+        if (known) continue;
+        Surface face;
+        face.shape = PlaneSurface{normal, offset};
+        double sum = 0.0;
+        Vec3 centroid = Vec3::Zero();
+        for (std::uint32_t i : inliers) {
+          const double e = cloud.points[i].dot(normal) - offset;
+          sum += e * e;
+          centroid += cloud.points[i];
+        }
+        face.rms = std::max(std::sqrt(sum / double(inliers.size())), 1e-9 * result.diagonal);
+        std::sort(inliers.begin(), inliers.end());
+        face.inliers = std::move(inliers);
+        const int index = int(result.surfaces.size());
+        for (std::uint32_t i : face.inliers) result.assignment[i] = index;
+        if (result.centroids.size() == result.surfaces.size()) {
+          result.centroids.push_back(centroid / double(face.inliers.size()));
+        }
+        result.surfaces.push_back(std::move(face));
+        ++stats.planes;
+      }
     }
   }
   return stats;

@@ -1,5 +1,5 @@
 #pragma once
-/// Bores found from their walls. On a raw scan a small bore's or boss's wall
+/// Bores found from their walls, and narrow faces from their points. On a raw scan a small bore's or boss's wall
 /// holds a few dozen points, about RANSAC's least support, and the randomised
 /// search often overlooks it (of a housing's eight counterbores and bolt
 /// holes, two found; of a flange's six bolt holes, two or three), although
@@ -57,5 +57,37 @@ struct WallBoreStats {
 /// fitSurfaces (its centroids are kept up to date).
 WallBoreStats addWallBores(const PointCloud& cloud, DetectionResult& result,
                            const WallBoreOptions& options = {});
+
+/// Parameters of addWallPlanes.
+struct WallPlaneOptions {
+  std::size_t maxDirections = 6;  ///< directions searched, at most (the heaviest first)
+  std::size_t maxPlanes = 32;     ///< planes added, at most
+  /// A face's patch links points closer than this many times the median
+  /// spacing of the points facing along it (or the detection's cluster
+  /// distance, when that is more): as the detection's own patches link the
+  /// scan's points (DetectOptions::spacingFactor). On a narrow face only
+  /// some normals face along it, so its points lie farther apart than the
+  /// scan's (ratio).
+  double spacingFactor = 3.0;
+};
+
+/// What addWallPlanes found.
+struct WallPlaneStats {
+  std::size_t directions = 0;  ///< directions and sides searched
+  std::size_t tried = 0;       ///< windows with enough points, tested
+  std::size_t planes = 0;      ///< planes added
+};
+
+/// Adds a plane to `result` for each patch of unassigned points that is a
+/// face across a direction of `result`'s surfaces: at least
+/// result.minPoints points within 2 epsilon along it whose normals lie
+/// within 60 degrees of it, connected, not explained by a surface found and
+/// not a plane found (its offset: the points' median). A narrow face (a
+/// groove's wall between two wider faces) has its normals blended by the
+/// neighbourhoods, and RANSAC's normal test refuses it (InverseCSG 176's
+/// scanner scan: its V-grooves' walls, 1 wide, 36-72 % of their points'
+/// normals within 60 degrees). The points are assigned to it.
+WallPlaneStats addWallPlanes(const PointCloud& cloud, DetectionResult& result,
+                             const WallPlaneOptions& options = {});
 
 }  // namespace csgvox

@@ -171,6 +171,78 @@ TEST(WallBores, StripsOfTwoParallelFacesAreNoBoss) {
   EXPECT_EQ(scan.result.surfaces.size(), before);
 }
 
+// A groove's wall x = 5 (y in [-10, 10], z in [-3, 0]) whose points no
+// surface took: a third of its normals along -x, a third blended 45
+// degrees towards +z, a third 70 degrees off (the faces beside it). The
+// part shows the x direction by its end face x = 20.
+TEST(WallPlanes, ANarrowFaceWithBlendedNormalsBecomesAPlaneAcrossThePartsDirection) {
+  WallScan scan;
+  Surface end;
+  end.shape = PlaneSurface{Vec3::UnitX(), 20.0};
+  end.rms = 0.01;
+  for (double y = -15.0; y <= 15.0; y += 1.0) {
+    for (double z = -3.0; z <= 0.0; z += 1.0) {
+      end.inliers.push_back(std::uint32_t(scan.cloud.size()));
+      scan.result.assignment.push_back(1);
+      scan.cloud.points.emplace_back(20.0, y, z);
+      scan.cloud.normals.push_back(Vec3::UnitX());
+    }
+  }
+  scan.result.surfaces.push_back(std::move(end));
+  std::uniform_real_distribution<double> y(-10.0, 10.0), z(-3.0, -0.5), noise(-0.02, 0.02);
+  const double tilts[] = {0.0, std::numbers::pi / 4.0, 70.0 * std::numbers::pi / 180.0};
+  for (int k = 0; k < 300; ++k) {
+    const double tilt = tilts[k % 3];
+    scan.cloud.points.emplace_back(5.0 + noise(scan.rng), y(scan.rng), z(scan.rng));
+    scan.cloud.normals.emplace_back(-std::cos(tilt), 0.0, std::sin(tilt));
+    scan.result.assignment.push_back(-1);
+  }
+  // Points a little above the top face (0.2: beyond epsilon, within two):
+  // its edge, not a face of their own.
+  for (int k = 0; k < 60; ++k) {
+    scan.cloud.points.emplace_back(y(scan.rng), y(scan.rng), 0.2);
+    scan.cloud.normals.push_back(Vec3::UnitZ());
+    scan.result.assignment.push_back(-1);
+  }
+  // Scattered points with random normals.
+  std::uniform_real_distribution<double> any(-1.0, 1.0);
+  for (int k = 0; k < 200; ++k) {
+    scan.cloud.points.emplace_back(10.0 * any(scan.rng), 10.0 * any(scan.rng),
+                                   -1.5 + 1.5 * any(scan.rng));
+    scan.cloud.normals.push_back(
+        Vec3(any(scan.rng), any(scan.rng), any(scan.rng)).normalized());
+    scan.result.assignment.push_back(-1);
+  }
+  scan.finish();
+  const std::size_t before = scan.result.surfaces.size();
+  const WallPlaneStats stats = addWallPlanes(scan.cloud, scan.result);
+  ASSERT_EQ(stats.planes, 1u);
+  ASSERT_EQ(scan.result.surfaces.size(), before + 1);
+  const Surface& face = scan.result.surfaces.back();
+  const auto* plane = face.as<PlaneSurface>();
+  ASSERT_NE(plane, nullptr);
+  EXPECT_GT(plane->normal.dot(-Vec3::UnitX()), 0.9999);
+  EXPECT_NEAR(plane->offset, -5.0, 0.03);
+  // The blended normals' points too, not the 70-degree ones.
+  EXPECT_GE(face.inliers.size(), 198u);
+  EXPECT_LE(face.inliers.size(), 202u);
+  for (std::uint32_t i : face.inliers) {
+    EXPECT_EQ(scan.result.assignment[i], int(before));
+    EXPECT_GE(-scan.cloud.normals[i].x(), 0.5);
+  }
+  EXPECT_EQ(scan.result.centroids.size(), scan.result.surfaces.size());
+
+  // Fewer facing points than a surface's least support: no face.
+  WallScan sparse;
+  for (int k = 0; k < 40; ++k) {
+    sparse.cloud.points.emplace_back(5.0, y(sparse.rng), z(sparse.rng));
+    sparse.cloud.normals.emplace_back(-std::cos(tilts[k % 3]), 0.0, std::sin(tilts[k % 3]));
+    sparse.result.assignment.push_back(-1);
+  }
+  sparse.finish();
+  EXPECT_EQ(addWallPlanes(sparse.cloud, sparse.result).planes, 0u);
+}
+
 TEST(WallBores, TheSameSeedFindsTheSameBores) {
   const auto run = [](std::uint64_t seed) {
     WallScan scan;
