@@ -287,7 +287,6 @@ bool duplicates(const std::vector<Surface>& surfaces, const Vec3& point, const V
   return false;
 }
 
-
 // Free points that a surface found explains lie on it (left out of its
 // patch, or a strip of normals blended at its edge), not on a wall of
 // their own.
@@ -530,14 +529,17 @@ WallPlaneStats addWallPlanes(const PointCloud& cloud, DetectionResult& result,
       std::sort(along.begin(), along.end());
       for (;;) {
         if (stats.planes >= options.maxPlanes) break;
-        // The densest window 2 epsilon wide among the points not yet taken.
+        // The densest window 2 epsilon wide among the points not yet taken
+        // (counted by a running sum of them).
+        std::vector<std::size_t> untaken(along.size() + 1, 0);
+        for (std::size_t k = 0; k < along.size(); ++k)
+          untaken[k + 1] = untaken[k] + (taken[along[k].second] ? 0 : 1);
         std::size_t bestLo = 0, bestCount = 0;
         for (std::size_t lo = 0, hi = 0; lo < along.size(); ++lo) {
           if (taken[along[lo].second]) continue;
           hi = std::max(hi, lo);
           while (hi < along.size() && along[hi].first <= along[lo].first + 2.0 * eps) ++hi;
-          std::size_t count = 0;
-          for (std::size_t k = lo; k < hi; ++k) count += taken[along[k].second] ? 0 : 1;
+          const std::size_t count = untaken[hi] - untaken[lo];
           if (count > bestCount) bestCount = count, bestLo = lo;
         }
         if (bestCount < least) break;
