@@ -592,7 +592,6 @@ const SetOperations& setOperations(const FitnessOptions& fitness, const SardfOpe
                                                              : minMaxOperations();
 }
 
-
 // A cylinder of the tree that stands for `c`: axes parallel within 8°, the
 // axes within a third of c's radius of each other, radii within a quarter.
 bool sameCylinder(const Cylinder& t, const Cylinder& c) {
@@ -654,6 +653,7 @@ void addSeenHoles(const PointCloud& scan, std::span<const Candidate> candidates,
   out.tree = library.adopt(normalizeTree(CsgTree::subtract(operands)));
   out.after = model.evaluate(out.tree);
 }
+
 }  // namespace
 
 const char* regionVerdictName(RegionVerdict verdict) {

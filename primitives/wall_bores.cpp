@@ -307,10 +307,11 @@ std::vector<char> explainedFreePoints(const PointCloud& cloud, const DetectionRe
 }
 
 // The largest set of `points` linked by steps shorter than `link` (between
-// each point and its 16 nearest), as indices into `points`.
-std::vector<std::uint32_t> largestCluster(const std::vector<Vec3>& points, double link) {
+// each point and its 16 nearest; `nn` holds `points`), as indices into
+// `points`.
+std::vector<std::uint32_t> largestCluster(const std::vector<Vec3>& points,
+                                          const NearestNeighbors& nn, double link) {
   if (points.empty()) return {};
-  const NearestNeighbors nn(points);
   std::vector<std::uint32_t> parent(points.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   std::vector<std::uint32_t> near;
@@ -331,23 +332,6 @@ std::vector<std::uint32_t> largestCluster(const std::vector<Vec3>& points, doubl
   for (std::uint32_t i = 0; i < points.size(); ++i)
     if (findRoot(parent, i) == root) members.push_back(i);
   return members;
-}
-
-// The median distance from each of `points` to its nearest other point.
-double medianSpacing(const std::vector<Vec3>& points) {
-  if (points.size() < 2) return 0.0;
-  const NearestNeighbors nn(points);
-  std::vector<std::uint32_t> near;
-  std::vector<double> d2;
-  std::vector<double> spacing;
-  spacing.reserve(points.size());
-  for (const Vec3& p : points) {
-    nn.kNearest(p, 2, near, &d2);
-    spacing.push_back(std::sqrt(d2.back()));
-  }
-  std::nth_element(spacing.begin(), spacing.begin() + std::ptrdiff_t(spacing.size() / 2),
-                   spacing.end());
-  return spacing[spacing.size() / 2];
 }
 
 }  // namespace
@@ -515,9 +499,6 @@ WallPlaneStats addWallPlanes(const PointCloud& cloud, DetectionResult& result,
     for (const double side : {1.0, -1.0}) {
       if (stats.planes >= options.maxPlanes) break;
       ++stats.directions;
-      // The points of the windows tried along this side, whatever the
-      // verdict (a face added takes its points from the others too).
-      std::vector<char> taken(cloud.size(), 0);
       const Vec3 normal = side * dir.d;
       // The free points facing along `normal`, by their position along it.
       std::vector<std::pair<double, std::uint32_t>> along;
@@ -527,16 +508,18 @@ WallPlaneStats addWallPlanes(const PointCloud& cloud, DetectionResult& result,
         along.emplace_back(cloud.points[i].dot(normal), std::uint32_t(i));
       }
       std::sort(along.begin(), along.end());
+      // The points (of `along`) of the windows tried on this side, whatever
+      // the verdict (a face added takes its points from the others too).
+      std::vector<char> taken(along.size(), 0);
       for (;;) {
         if (stats.planes >= options.maxPlanes) break;
         // The densest window 2 epsilon wide among the points not yet taken
         // (counted by a running sum of them).
         std::vector<std::size_t> untaken(along.size() + 1, 0);
-        for (std::size_t k = 0; k < along.size(); ++k)
-          untaken[k + 1] = untaken[k] + (taken[along[k].second] ? 0 : 1);
+        for (std::size_t k = 0; k < along.size(); ++k) untaken[k + 1] = untaken[k] + !taken[k];
         std::size_t bestLo = 0, bestCount = 0;
         for (std::size_t lo = 0, hi = 0; lo < along.size(); ++lo) {
-          if (taken[along[lo].second]) continue;
+          if (taken[lo]) continue;
           hi = std::max(hi, lo);
           while (hi < along.size() && along[hi].first <= along[lo].first + 2.0 * eps) ++hi;
           const std::size_t count = untaken[hi] - untaken[lo];
@@ -546,15 +529,18 @@ WallPlaneStats addWallPlanes(const PointCloud& cloud, DetectionResult& result,
         std::vector<std::uint32_t> window;
         for (std::size_t k = bestLo;
              k < along.size() && along[k].first <= along[bestLo].first + 2.0 * eps; ++k) {
-          if (!taken[along[k].second]) window.push_back(along[k].second);
+          if (taken[k]) continue;
+          taken[k] = 1;
+          window.push_back(along[k].second);
         }
         ++stats.tried;
-        for (std::uint32_t i : window) taken[i] = 1;
         // Its largest connected patch.
         std::vector<Vec3> positions;
         for (std::uint32_t i : window) positions.push_back(cloud.points[i]);
-        const std::vector<std::uint32_t> patch =
-            largestCluster(positions, std::max(link, options.spacingFactor * medianSpacing(positions)));
+        const NearestNeighbors nn(positions);
+        const double reach =
+            std::max(link, options.spacingFactor * medianNearestDistance(positions, nn));
+        const std::vector<std::uint32_t> patch = largestCluster(positions, nn, reach);
         if (patch.size() < least) continue;
         std::vector<std::uint32_t> inliers;
         std::vector<double> t;

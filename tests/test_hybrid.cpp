@@ -248,9 +248,9 @@ TEST(Hybrid, LeavesAnExactTreeAloneAndIsDeterministic) {
 // scan holds the rims and an eighth of the wall's points, as a scanner sees
 // a small bore; the labels see through it, the voxel stage's tree is the
 // plate alone. Its points are too few for a region and raise the fitness by
-// less than minGain·N, so only the last pass (seenHoles) subtracts it; a
-// cylinder candidate where the plate is solid, and one the tree already
-// has, are not subtracted.
+// less than minGain·N, so only the last pass (seenHoles) subtracts it.
+// Labels that hold it inside refuse it; a cylinder candidate where the
+// plate is solid, and one the tree already has, are not subtracted.
 TEST(Hybrid, SubtractsAHoleTheScanShowsByItsRimsAndALittleWall) {
   const Box plate{Vec3::Zero(), Mat3::Identity(), Vec3(20, 12, 3)};
   const Cylinder hole{Vec3(6, 3, 0), Vec3::UnitZ(), 0.5, 6.0};
@@ -296,6 +296,13 @@ TEST(Hybrid, SubtractsAHoleTheScanShowsByItsRimsAndALittleWall) {
   const HybridResult without = repairTree(scan, voxelTree, candidates, grid, inside, off);
   EXPECT_EQ(without.holesAdded, 0u);
   EXPECT_TRUE(without.tree.structurallyEqual(voxelTree)) << treeNodeJson(without.tree);
+
+  // Labels that hold the hole's voxels inside refuse it, though its points
+  // would pay for it.
+  const VoxelSet full = solidVoxels(voxelTree, grid);
+  const HybridResult labelled = repairTree(scan, voxelTree, candidates, grid, full);
+  EXPECT_EQ(labelled.holesAdded, 0u);
+  EXPECT_TRUE(labelled.tree.structurallyEqual(voxelTree)) << treeNodeJson(labelled.tree);
 
   // The tree that has the hole gains nothing more.
   const HybridResult again = repairTree(scan, truth, candidates, grid, inside);
