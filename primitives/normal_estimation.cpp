@@ -4,6 +4,7 @@
 #include <CGAL/Monge_via_jet_fitting.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -560,17 +561,31 @@ std::vector<std::vector<std::size_t>> orientAlongSpanningForest(const std::vecto
       return std::tie(weight, a, b) < std::tie(o.weight, o.a, o.b);
     }
   };
-  std::vector<Edge> edges;
-  edges.reserve(n * hoods.k);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (unsigned c = 1; c < hoods.k; ++c) {
-      const std::uint32_t j = hoods.of(i)[c];
-      edges.push_back({edgeWeight(points[i], normals[i], points[j], normals[j]),
-                       static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
-                       static_cast<std::uint32_t>(std::max<std::size_t>(i, j))});
+  // Every neighbour pair once: a pair both points hold is listed by the
+  // lower (its second copy, the same edge, would join nothing). The weights
+  // are symmetric, so the sorted list is the same whoever lists a pair.
+  const unsigned k = hoods.k;
+  std::vector<Edge> edges(n * (k - 1));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      for (unsigned c = 1; c < k; ++c) {
+        const std::uint32_t j = hoods.of(i)[c];
+        Edge& e = edges[i * (k - 1) + c - 1];
+        const std::uint32_t* other = hoods.of(j);
+        if (j < i && std::find(other + 1, other + k, std::uint32_t(i)) != other + k) {
+          e = {0.0, j, j};  // listed by j
+          continue;
+        }
+        e = {edgeWeight(points[i], normals[i], points[j], normals[j]),
+             static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
+             static_cast<std::uint32_t>(std::max<std::size_t>(i, j))};
+      }
     }
-  }
-  std::sort(edges.begin(), edges.end());
+  });
+  edges.erase(std::remove_if(edges.begin(), edges.end(), [](const Edge& e) { return e.a == e.b; }),
+              edges.end());
+  // No two edges are equal: any sort gives the same order.
+  tbb::parallel_sort(edges.begin(), edges.end());
 
   // Kruskal.
   std::vector<std::uint32_t> parent(n);
