@@ -59,11 +59,7 @@ struct DetectAndFitOptions {
   /// The raw-scan stages below run when the normals were estimated from raw
   /// points (detect.estimatedNormals) or are a scanner's: given normals
   /// whose noise on the first surfaces found (DetectionResult::normalNoise)
-  /// exceeds this many radians. A uniform sample's exact normals read at most
-  /// 0.0005 (the bundled scans, noisy ones too), a scanner's from its range
-  /// image 0.022-0.026 and estimated ones about 0.017 (the bundled parts'
-  /// scanner scans).
-  double scannerNormalNoise = 0.005;
+  /// exceeds detect.scannerNormalNoise.
   /// On a raw scan, a
   /// round gap in a plane's points that no curved surface explains becomes a
   /// hole cylinder (addRimHoles): a scanner sees little of a small bore's

@@ -827,8 +827,11 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
 
   const std::vector<Stage> stages = ransacStages(options, result.minPoints);
   FitScales scales = fitScales(result);
-  const std::optional<NearestNeighbors> nn =
-      options.estimatedNormals ? std::optional<NearestNeighbors>(cloud.points) : std::nullopt;
+  // Normals estimated from raw points, or (decided on the first stage's
+  // surfaces) a scanner's.
+  bool raw = options.estimatedNormals;
+  std::optional<NearestNeighbors> nn;
+  if (raw) nn.emplace(cloud.points);
   std::vector<Surface> found;
   // The stages settle the surfaces found so far again after each pass, most
   // of them unchanged: their fits are looked up.
@@ -850,7 +853,7 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
       return selectModel(cloud, options, scales, result.epsilon, diag, surf);
     };
     if (!ransacPass(cloud, subset, stages[stage].types, params, passSeed(options.seed, int(stage)),
-                    diag, options.estimatedNormals, cb, accept, found)) {
+                    diag, raw, cb, accept, found)) {
       return cancelled();
     }
     if (stage == 0) {
@@ -858,11 +861,15 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
       if (const double sn = normalNoiseOnSurfaces(cloud, found); sn >= 0.0) {
         result.normalNoise = sn;
         scales = fitScales(result);
+        if (!raw && sn > options.scannerNormalNoise) {
+          raw = true;
+          nn.emplace(cloud.points);
+        }
       }
     }
     result.minPoints = std::min(result.minPoints, stages[stage].minPoints);
     settle(cloud, result, found, subset, fits);
-    if (options.estimatedNormals) {
+    if (raw) {
       dropExplainedLeftovers(cloud, *nn, found, result.assignment, result.epsilon, subset);
     }
   }

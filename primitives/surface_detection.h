@@ -42,6 +42,15 @@ struct DetectOptions {
   /// not searched again (else small spurious surfaces explain those strips:
   /// a false rounded edge). Given normals are trusted as they are.
   bool estimatedNormals = false;
+  /// Given normals whose noise on the first stage's surfaces
+  /// (DetectionResult::normalNoise) exceeds this many radians are a
+  /// scanner's, from its range image, and are treated from the next stage
+  /// on as estimated ones; the raw-scan stages after detection
+  /// (DetectAndFitOptions) follow the same test. A uniform sample's exact
+  /// normals read at most 0.0005 (the bundled scans, noisy ones too), a
+  /// scanner's 0.022-0.026 and estimated ones about 0.017 (the bundled
+  /// parts' scanner scans).
+  double scannerNormalNoise = 0.005;
   double minPoints = 0.002;  ///< fewest inliers of a surface, fraction of the number of points N
   std::size_t minPointsFloor =
       12;  ///< fewest inliers of a surface, count (applies when minPoints*N is smaller)

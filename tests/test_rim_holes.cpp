@@ -783,11 +783,11 @@ TEST(RimHoles, AScannersOwnNormalsMakeARawScanTooAndASamplesExactOnesDoNot) {
   DetectAndFitOptions options;  // detect.estimatedNormals false: the normals were given
   const SurfacesAndCandidates raw = detectAndFit(scanned, options);
   ASSERT_TRUE(raw.ok()) << raw.detection.message;
-  EXPECT_GT(raw.detection.normalNoise, options.scannerNormalNoise);
+  EXPECT_GT(raw.detection.normalNoise, options.detect.scannerNormalNoise);
   EXPECT_GT(raw.wallBores.directions, 0u) << raw.detection.message;
   // Taken for exact normals, the same scan skips those stages.
   DetectAndFitOptions exact = options;
-  exact.scannerNormalNoise = 1.0;
+  exact.detect.scannerNormalNoise = 1.0;
   const SurfacesAndCandidates sample = detectAndFit(scanned, exact);
   ASSERT_TRUE(sample.ok());
   EXPECT_EQ(sample.wallBores.directions, 0u);
@@ -796,7 +796,7 @@ TEST(RimHoles, AScannersOwnNormalsMakeARawScanTooAndASamplesExactOnesDoNot) {
   ASSERT_FALSE(uniform.info.normalsEstimated);
   const SurfacesAndCandidates given = detectAndFit(uniform.cloud, options);
   ASSERT_TRUE(given.ok());
-  EXPECT_LT(given.detection.normalNoise, 0.1 * options.scannerNormalNoise);
+  EXPECT_LT(given.detection.normalNoise, 0.1 * options.detect.scannerNormalNoise);
   EXPECT_EQ(given.wallBores.directions, 0u);
 }
 
