@@ -147,7 +147,7 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   fitSurfaces(scan, out.detection, fit);
   // A raw scan: normals estimated from the points, or given by a scanner
   // (noisy, measured on the first surfaces), not a sample's exact ones.
-  const bool raw = options.detect.estimatedNormals || det.normalNoise > options.detect.scannerNormalNoise;
+  const bool raw = det.rawNormals;
   if (options.wallBores && raw) {
     WallBoreOptions wo = options.wallBoreOptions;
     wo.seed = options.seed;

@@ -56,10 +56,10 @@ struct DetectAndFitOptions {
   /// Bytes the voxel stage may use (0: no limit): a finer grid that would
   /// need more (voxelStageBytes) falls back to `resolution`.
   std::size_t memoryLimit = 0;
-  /// The raw-scan stages below run when the normals were estimated from raw
-  /// points (detect.estimatedNormals) or are a scanner's: given normals
-  /// whose noise on the first surfaces found (DetectionResult::normalNoise)
-  /// exceeds detect.scannerNormalNoise.
+  /// The raw-scan stages below run when detection found the normals a raw
+  /// scan's (DetectionResult::rawNormals): estimated from raw points
+  /// (detect.estimatedNormals) or a scanner's, whose noise on the first
+  /// surfaces found exceeds detect.scannerNormalNoise.
   /// On a raw scan, a
   /// round gap in a plane's points that no curved surface explains becomes a
   /// hole cylinder (addRimHoles): a scanner sees little of a small bore's

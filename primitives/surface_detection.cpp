@@ -861,10 +861,10 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
       if (const double sn = normalNoiseOnSurfaces(cloud, found); sn >= 0.0) {
         result.normalNoise = sn;
         scales = fitScales(result);
-        if (!raw && sn > options.scannerNormalNoise) {
-          raw = true;
-          nn.emplace(cloud.points);
-        }
+      }
+      if (!raw && result.normalNoise > options.scannerNormalNoise) {
+        raw = true;
+        nn.emplace(cloud.points);
       }
     }
     result.minPoints = std::min(result.minPoints, stages[stage].minPoints);
@@ -877,6 +877,7 @@ DetectionResult detectOnAll(const PointCloud& cloud, const DetectOptions& option
 
   result.surfaces = std::move(found);
   result.searchedPoints = cloud.size();
+  result.rawNormals = raw;
   summarise(cloud, result);
   report(1.0, "ransac");
   return result;

@@ -89,6 +89,10 @@ struct DetectionResult {
   double noise = 0.0;     ///< estimated position noise sigma, scan units
   double normalNoise =
       0.0;  ///< estimated normal noise sigma, radians (measured on the first planes found)
+  /// The normals are a raw scan's: estimated (DetectOptions::estimatedNormals)
+  /// or, by their noise after the first stage, a scanner's
+  /// (DetectOptions::scannerNormalNoise). The raw-scan stages follow it.
+  bool rawNormals = false;
   double epsilon = 0.0;          ///< inlier distance used, scan units
   double clusterEpsilon = 0.0;   ///< connectivity distance used, scan units
   double normalThreshold = 0.9;  ///< normal agreement used (|cos|)

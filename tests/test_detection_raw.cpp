@@ -6,11 +6,10 @@
 
 #include "io/tree_json.h"
 #include "mesh/surface_sampler.h"
-#include "scanner/scanner.h"
-#include "scanner/tree_caster.h"
 #include "part_list.h"
 #include "primitives/normal_estimation.h"
 #include "primitives/surface_detection.h"
+#include "scanner_scan.h"
 #include "test_helpers.h"
 
 namespace csgvox {
@@ -105,21 +104,18 @@ TEST(DetectionOnEstimatedNormals, NarrowWallsOfAThinPlateArePlanes) {
 // the surfaces (l_bracket's 20 000-point scanner scan: 41; now 14, as with
 // estimatedNormals; countersunk_plate 46 -> 20, housing_complex 32 -> 16).
 TEST(DetectionOnEstimatedNormals, AScannersOwnNormalsAreJudgedAsEstimatedOnes) {
-  const CsgTree truth = readTreeJson(test::dataDir() / "l_bracket" / "tree.json");
-  const TreeCaster caster(truth);
-  ScannerOptions so;
-  so.normals = ScannerNormals::Scanner;
-  so.points = 20000;
-  const PointCloud scanned = scanPart(caster, so).cloud;
+  const PointCloud scanned = test::scannerScan("l_bracket", 20000, ScannerNormals::Scanner);
   ASSERT_TRUE(scanned.hasNormals());
   const DetectionResult measured = detectSurfaces(scanned);
   ASSERT_TRUE(measured.ok()) << measured.message;
   EXPECT_GT(measured.normalNoise, DetectOptions{}.scannerNormalNoise);
+  EXPECT_TRUE(measured.rawNormals);
   EXPECT_LE(measured.surfaces.size(), 16u) << measured.message;  // 13 faces
   DetectOptions trusting;
   trusting.scannerNormalNoise = 1.0;  // never a scanner's
   const DetectionResult plain = detectSurfaces(scanned, trusting);
   ASSERT_TRUE(plain.ok()) << plain.message;
+  EXPECT_FALSE(plain.rawNormals);
   EXPECT_GT(plain.surfaces.size(), 2 * measured.surfaces.size()) << plain.message;
 }
 

@@ -19,7 +19,7 @@
 #include "part_list.h"
 #include "pipeline/detect_and_fit.h"
 #include "scanner/scanner.h"
-#include "scanner/tree_caster.h"
+#include "scanner_scan.h"
 #include "pipeline/reconstruct.h"
 #include "primitives/rim_holes.h"
 #include "test_helpers.h"
@@ -773,12 +773,8 @@ TEST(RimHoles, AScannersOwnNormalsMakeARawScanTooAndASamplesExactOnesDoNot) {
   // the scan is as raw as without them, and the raw-scan stages (the search
   // of the walls along the part's directions, the rims) must run on it. The
   // plate's uniform scan, whose normals are exact, stays a sample.
-  const CsgTree truth = readTreeJson(test::dataDir() / "countersunk_plate" / "tree.json");
-  const TreeCaster caster(truth);
-  ScannerOptions so;
-  so.normals = ScannerNormals::Scanner;
-  so.points = 20000;
-  const PointCloud scanned = scanPart(caster, so).cloud;
+  const PointCloud scanned =
+      test::scannerScan("countersunk_plate", 20000, ScannerNormals::Scanner);
   ASSERT_TRUE(scanned.hasNormals());
   DetectAndFitOptions options;  // detect.estimatedNormals false: the normals were given
   const SurfacesAndCandidates raw = detectAndFit(scanned, options);
