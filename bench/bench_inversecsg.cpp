@@ -2,7 +2,8 @@
 // (NNN.off) and the size of InverseCSG's solution for each
 // (inversecsg-results.csv). Every mesh is sampled into an oriented scan,
 // optionally noised, and reconstructed; the row reports the status, the wall
-// time of reconstruct(), the tree's size next to InverseCSG's, and the
+// time of reconstruct() (and of the reading step before it, for raw scans),
+// the tree's size next to InverseCSG's, and the
 // volumetric IoU between the tree and the mesh's solid.
 //
 // Run: build/bench/bench_inversecsg DIR [--points N] [--noise F] [--res R]
@@ -161,6 +162,7 @@ struct Reference {
 struct Result {
   std::string status = "crashed";  // Ok, NoSurfaces, ..., or error / crashed / killed
   double seconds = -1.0;           // wall time of reconstruct(), -1: not run
+  double readSeconds = 0.0;        // wall time of the reading step (raw scans only)
   long primitives = -1;
   long operations = -1;
   double iou = -1.0;  // -1: not measured
@@ -289,7 +291,10 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
     }
     if (kind == ScanKind::Uniform && opt.estimateNormals) raw.points = std::move(scan.points);
     if (!raw.empty()) {
+      const auto r0 = std::chrono::steady_clock::now();
       Scan read = scanFromArrays(raw.points, raw.normals, path.string());
+      res.readSeconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
       estimatedNormals = read.info.normalsEstimated;
       scan = std::move(read.cloud);
     }
@@ -411,8 +416,8 @@ Result runModel(const Options& opt, const std::string& model, ScanKind kind) {
 // One result as a single line for the pipe (the note is last, may hold tabs).
 std::string encode(const Result& r) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%s\t%.6f\t%ld\t%ld\t%.6f\t", r.status.c_str(), r.seconds,
-                r.primitives, r.operations, r.iou);
+  std::snprintf(buf, sizeof buf, "%s\t%.6f\t%.6f\t%ld\t%ld\t%.6f\t", r.status.c_str(),
+                r.seconds, r.readSeconds, r.primitives, r.operations, r.iou);
   std::string note = r.note;
   std::replace(note.begin(), note.end(), '\n', ' ');
   return buf + note;
@@ -420,14 +425,16 @@ std::string encode(const Result& r) {
 
 bool decode(const std::string& line, Result& r) {
   std::istringstream in(line);
-  std::string seconds, prims, ops, iou;
+  std::string seconds, readSeconds, prims, ops, iou;
   if (!std::getline(in, r.status, '\t') || !std::getline(in, seconds, '\t') ||
+      !std::getline(in, readSeconds, '\t') ||
       !std::getline(in, prims, '\t') || !std::getline(in, ops, '\t') ||
       !std::getline(in, iou, '\t')) {
     return false;
   }
   std::getline(in, r.note);
   r.seconds = std::atof(seconds.c_str());
+  r.readSeconds = std::atof(readSeconds.c_str());
   r.primitives = std::atol(prims.c_str());
   r.operations = std::atol(ops.c_str());
   r.iou = std::atof(iou.c_str());
@@ -657,19 +664,22 @@ void printHeading(const Options& opt) {
         "hybrid repair operations: %s\n",
         std::string(nameOf<SetOperationKind>(kSetOperationNames, *opt.repairOperations)).c_str());
   std::printf(
-      "time_s: wall time of reconstruct(); prims/ops: our tree | InverseCSG's; IoU: "
+      "time_s: wall time of reconstruct(); read_s: of the reading step before it (outliers "
+      "removed, normals estimated and oriented: raw scans only); prims/ops: our tree | "
+      "InverseCSG's; IoU: "
       "tree vs mesh solid, %d random points of the joint box (-: not measured)\n",
       opt.iouSamples);
   std::printf("load average at start: %.2f\n", loadAverage());
-  std::printf("%-6s %-7s %6s %-13s %8s %5s %5s %5s %5s %7s  %s\n", "model", "scan", "faces",
-              "status", "time_s", "prims", "ics_p", "ops", "ics_o", "IoU", "note");
+  std::printf("%-6s %-7s %6s %-13s %8s %6s %5s %5s %5s %5s %7s  %s\n", "model", "scan",
+              "faces", "status", "time_s", "read_s", "prims", "ics_p", "ops", "ics_o", "IoU",
+              "note");
 }
 
 // A model's row of the table: our result next to InverseCSG's `r`.
 void printRow(const std::string& model, ScanKind kind, const Reference& r, const Result& res) {
-  std::printf("%-6s %-7s %6zu %-13s %8.2f %5ld %5zu %5ld %5zu ", model.c_str(), scanKindName(kind),
-              r.faces, res.status.c_str(), res.seconds, res.primitives, r.primitives,
-              res.operations, r.operations);
+  std::printf("%-6s %-7s %6zu %-13s %8.2f %6.2f %5ld %5zu %5ld %5zu ", model.c_str(),
+              scanKindName(kind), r.faces, res.status.c_str(), res.seconds, res.readSeconds,
+              res.primitives, r.primitives, res.operations, r.operations);
   if (res.iou >= 0.0) {
     std::printf("%7.4f", res.iou);
   } else {
@@ -683,12 +693,15 @@ void printRow(const std::string& model, ScanKind kind, const Reference& r, const
 struct Tally {
   std::size_t ok = 0, withIou = 0, iou95 = 0, iou99 = 0, notLarger = 0;
   long ourPrims = 0, theirPrims = 0;
-  std::vector<double> times, ious;
+  std::vector<double> times, totals, ious;  // totals: read + reconstruct
 
   // Counts a model's result `res` against InverseCSG's `r` (`known`: the
   // CSV has the model).
   void add(const Result& res, const Reference& r, bool known) {
-    if (res.seconds >= 0.0) times.push_back(res.seconds);
+    if (res.seconds >= 0.0) {
+      times.push_back(res.seconds);
+      totals.push_back(res.readSeconds + res.seconds);
+    }
     if (res.status != "Ok") return;
     ++ok;
     ourPrims += res.primitives;
@@ -720,6 +733,8 @@ void printSummary(const Options& opt, ScanKind kind, const Tally& t) {
   std::printf("  reconstruct time, median/max:  %.2f / %.2f s (%zu runs)\n", median(t.times),
               t.times.empty() ? -1.0 : *std::max_element(t.times.begin(), t.times.end()),
               t.times.size());
+  std::printf("  read + reconstruct, median/max: %.2f / %.2f s\n", median(t.totals),
+              t.totals.empty() ? -1.0 : *std::max_element(t.totals.begin(), t.totals.end()));
   std::printf("  load average at end:           %.2f\n", loadAverage());
 }
 
@@ -745,15 +760,30 @@ int main(int argc, char** argv) {
   if (opt.uniform) kinds.push_back(ScanKind::Uniform);
   if (opt.scanner) kinds.push_back(ScanKind::Scanner);
   std::map<ScanKind, Tally> tally;
+  // Read + reconstruct of each model's scanner row over its uniform row's.
+  std::vector<double> timeRatios;
   for (const std::string& model : opt.models) {
     const auto ref = refs.find(model);
     const Reference r = ref != refs.end() ? ref->second : Reference{};
+    double uniformTotal = -1.0;
     for (ScanKind kind : kinds) {
       const Result res = runIsolated(opt, model, kind);
       printRow(model, kind, r, res);
       tally[kind].add(res, r, ref != refs.end());
+      const double total = res.seconds >= 0.0 ? res.readSeconds + res.seconds : -1.0;
+      if (kind == ScanKind::Uniform) uniformTotal = total;
+      if (kind == ScanKind::Scanner && uniformTotal > 0.0 && total >= 0.0)
+        timeRatios.push_back(total / uniformTotal);
     }
   }
   for (ScanKind kind : kinds) printSummary(opt, kind, tally[kind]);
+  if (!timeRatios.empty()) {
+    const std::size_t above = std::size_t(std::count_if(
+        timeRatios.begin(), timeRatios.end(), [](double x) { return x > 1.5; }));
+    std::printf(
+        "\nscanner row over uniform row, read + reconstruct: median %.2f, above 1.5 on %zu of "
+        "%zu models\n",
+        median(timeRatios), above, timeRatios.size());
+  }
   return 0;
 }
