@@ -203,17 +203,43 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
   return hoods;
 }
 
-/// Calls `f` with the unit normal of every plane through point `i` and two
-/// of its neighbours `hood` (k indices, i first), but nearly collinear
-/// triples (their planes the rounding turns).
+/// The offsets of a neighbourhood's points (k indices, i first) from point
+/// i, one array per coordinate: the same differences as `q - p`, so that the
+/// planes through i, tried by the hundred per point, measure them in plain
+/// loops over the arrays (the same products and sums as `n * (q - p)`).
+struct HoodOffsets {
+  std::vector<double> x, y, z;
+
+  HoodOffsets(const std::vector<Point3>& points, const std::uint32_t* hood, unsigned k,
+              const Point3& p)
+      : x(k), y(k), z(k) {
+    for (unsigned l = 0; l < k; ++l) {
+      const Point3& q = points[hood[l]];
+      x[l] = q.x() - p.x();
+      y[l] = q.y() - p.y();
+      z[l] = q.z() - p.z();
+    }
+  }
+  unsigned size() const { return unsigned(x.size()); }
+  Vector3 operator[](unsigned l) const { return Vector3(x[l], y[l], z[l]); }
+  // Every neighbour's signed distance along `n` (as n * (q - p)) into `d`.
+  void along(const Vector3& n, double* d) const {
+    const double nx = n.x(), ny = n.y(), nz = n.z();
+    const unsigned k = size();
+    for (unsigned l = 0; l < k; ++l) d[l] = nx * x[l] + ny * y[l] + nz * z[l];
+  }
+};
+
+/// Calls `f` with the unit normal of every plane through point i and two
+/// of its neighbours (`offsets` from i), but nearly collinear triples (their
+/// planes the rounding turns).
 template <class F>
-void forEachPlaneThrough(const std::vector<Point3>& points, const std::uint32_t* hood, unsigned k,
-                         std::size_t i, const F& f) {
-  const Point3& p = points[i];
+void forEachPlaneThrough(const HoodOffsets& offsets, const F& f) {
+  const unsigned k = offsets.size();
   for (unsigned a = 1; a < k; ++a) {
-    const Vector3 u = points[hood[a]] - p;
+    const Vector3 u = offsets[a];
     for (unsigned b = a + 1; b < k; ++b) {
-      const Vector3 v = points[hood[b]] - p;
+      const Vector3 v = offsets[b];
       const Vector3 n = CGAL::cross_product(u, v);
       const double length = std::sqrt(n.squared_length());
       if (!(length > kCollinearSine * std::sqrt(u.squared_length() * v.squared_length()))) continue;
@@ -231,14 +257,17 @@ void forEachPlaneThrough(const std::vector<Point3>& points, const std::uint32_t*
 std::optional<Vector3> dominantPlane(const std::vector<Point3>& points, const std::uint32_t* hood,
                                      unsigned k, std::size_t i, double tolerance) {
   const Point3& p = points[i];
+  const HoodOffsets offsets(points, hood, k, p);
+  std::vector<double> along(k);
   int bestCount = 0;
   double bestSpread = 0.0;
   Vector3 best = CGAL::NULL_VECTOR;
-  forEachPlaneThrough(points, hood, k, i, [&](const Vector3& n) {
+  forEachPlaneThrough(offsets, [&](const Vector3& n) {
     int count = 0;
     double spread = 0.0;
+    offsets.along(n, along.data());
     for (unsigned l = 0; l < k; ++l) {
-      const double d = std::abs(n * (points[hood[l]] - p));
+      const double d = std::abs(along[l]);
       if (d <= tolerance) {
         ++count;
         spread += d;
@@ -302,24 +331,36 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
                                      const std::vector<Vector3>& normals, const std::uint32_t* hood,
                                      unsigned k, std::size_t i, double tolerance) {
   const Point3& p = points[i];
+  const HoodOffsets offsets(points, hood, k, p);
   std::vector<double> rest;
   int bestCount = 0;
   Vector3 best = CGAL::NULL_VECTOR;
   double bestOffset = 0.0;
   double bestSpread = 0.0;
   std::vector<double> offset(k);
+  // The fewest points the two sheets must hold to be accepted.
+  int minCount = 0;
+  while (double(minCount) < kWallShare * double(k)) ++minCount;
   const auto consider = [&](const Vector3& n) {
-    int own = 0;
+    int own = 0, above = 0;
     rest.clear();
+    offsets.along(n, offset.data());
     for (unsigned l = 0; l < k; ++l) {
-      const double d = offset[l] = n * (points[hood[l]] - p);
+      const double d = offset[l];
       if (std::abs(d) <= tolerance) {
         ++own;
       } else {
         rest.push_back(d);
+        above += d > 0.0;
       }
     }
     if (rest.size() < kWallMinOther) return;
+    // The second sheet lies on one side (its points within the tolerance of
+    // the median offset, itself beyond the tolerance), so it holds at most
+    // the rest on the larger side: a plane that cannot reach the pair
+    // accepted or the best so far is passed over (the same result).
+    const int below = int(rest.size()) - above;
+    if (own + std::max(above, below) < std::max(minCount, bestCount)) return;
     const auto middle = rest.begin() + std::ptrdiff_t(rest.size() / 2);
     std::nth_element(rest.begin(), middle, rest.end());
     const double mid = *middle;
@@ -343,7 +384,7 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
       bestOffset = mid;
     }
   };
-  forEachPlaneThrough(points, hood, k, i, consider);
+  forEachPlaneThrough(offsets, consider);
   // A point alone on its face among the other face's points: no plane
   // through it and two of them is the faces', but their own jets are.
   for (unsigned l = 1; l < k; ++l) {
