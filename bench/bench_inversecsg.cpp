@@ -167,6 +167,9 @@ struct Result {
   long operations = -1;
   double iou = -1.0;  // -1: not measured
   std::string note;   // the message, or why the IoU is missing
+
+  // Read + reconstruct, -1: not run.
+  double totalSeconds() const { return seconds >= 0.0 ? readSeconds + seconds : -1.0; }
 };
 
 double loadAverage() {
@@ -700,7 +703,7 @@ struct Tally {
   void add(const Result& res, const Reference& r, bool known) {
     if (res.seconds >= 0.0) {
       times.push_back(res.seconds);
-      totals.push_back(res.readSeconds + res.seconds);
+      totals.push_back(res.totalSeconds());
     }
     if (res.status != "Ok") return;
     ++ok;
@@ -770,7 +773,7 @@ int main(int argc, char** argv) {
       const Result res = runIsolated(opt, model, kind);
       printRow(model, kind, r, res);
       tally[kind].add(res, r, ref != refs.end());
-      const double total = res.seconds >= 0.0 ? res.readSeconds + res.seconds : -1.0;
+      const double total = res.totalSeconds();
       if (kind == ScanKind::Uniform) uniformTotal = total;
       if (kind == ScanKind::Scanner && uniformTotal > 0.0 && total >= 0.0)
         timeRatios.push_back(total / uniformTotal);

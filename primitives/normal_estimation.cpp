@@ -338,7 +338,7 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
   double bestOffset = 0.0;
   double bestSpread = 0.0;
   std::vector<double> offset(k);
-  // The fewest points the two sheets must hold to be accepted.
+  // The fewest points the two sheets must hold to be accepted (kWallShare of k).
   int minCount = 0;
   while (double(minCount) < kWallShare * double(k)) ++minCount;
   const auto consider = [&](const Vector3& n) {
@@ -390,7 +390,7 @@ std::optional<Vector3> twoSheetPlane(const std::vector<Point3>& points,
   for (unsigned l = 1; l < k; ++l) {
     if (isUsable(normals[hood[l]])) consider(normals[hood[l]]);
   }
-  if (double(bestCount) < kWallShare * double(k)) return std::nullopt;
+  if (bestCount < minCount) return std::nullopt;
   // Both sheets about their own centroids, and their spread about their planes.
   std::vector<Vec3> sheet[2];
   for (unsigned l = 0; l < k; ++l) {
