@@ -375,25 +375,32 @@ bool ransacPass(const PointCloud& cloud, const std::vector<std::uint32_t>& subse
 // with larger swings per part.)
 constexpr double kRawSelectionSigmas = 3.0;
 
-// Robust cost of a surface on points, in units of the noise: per point the
-// fit's scaled squared distance (capped at `cap`) plus, with `normals`, its
-// scaled squared normal deviation (capped at kNormalChi2); both caps for
-// points whose normal disagrees.
-double selectionCost(const PointCloud& cloud, const std::vector<std::uint32_t>& indices,
-                     const Surface& s, const FitScales& scales, double cap, bool normals,
-                     double threshold) {
-  const double normalCap = normals ? kNormalChi2 : 0.0;
-  double cost = 0.0;
+// Robust costs of a surface on points, in units of the noise. `full`: per
+// point the fit's scaled squared distance (capped at `cap`) plus its scaled
+// squared normal deviation (capped at kNormalChi2), both caps for points
+// whose normal disagrees. `bulk` (only when asked): the distances alone,
+// capped at `bulkCap`, and that cap for points whose normal disagrees.
+struct SelectionCosts {
+  double full = 0.0;
+  double bulk = 0.0;
+};
+
+SelectionCosts selectionCosts(const PointCloud& cloud, const std::vector<std::uint32_t>& indices,
+                              const Surface& s, const FitScales& scales, double cap,
+                              double bulkCap, bool withBulk, double threshold) {
+  SelectionCosts c;
   for (std::uint32_t i : indices) {
     const PointFit fit = pointFit(s, cloud.points[i], cloud.normals[i], scales);
     if (fit.cosine < threshold) {
-      cost += cap + normalCap;
+      c.full += cap + kNormalChi2;
+      if (withBulk) c.bulk += bulkCap;
       continue;
     }
-    cost += std::min(cap, std::pow(fit.distance / scales.position, 2)) +
-            std::min(normalCap, fit.normal2);
+    const double d2 = std::pow(fit.distance / scales.position, 2);
+    c.full += std::min(cap, d2) + std::min(kNormalChi2, fit.normal2);
+    if (withBulk) c.bulk += std::min(bulkCap, d2);
   }
-  return cost;
+  return c;
 }
 
 // Normal noise measured on detected surfaces whose normals do not vary: for
@@ -468,22 +475,8 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   }
   if (candidates.empty()) return false;
   const double logN = std::log(double(std::max<std::size_t>(2, shape.inliers.size())));
-  const auto lowest = [&](double cap, bool normals) {
-    std::size_t k = 0;
-    double best = std::numeric_limits<double>::infinity();
-    for (std::size_t j = 0; j < candidates.size(); ++j) {
-      const double score = selectionCost(cloud, shape.inliers, candidates[j], scales, cap,
-                                         normals, o.normalThreshold) +
-                           parameterCount(candidates[j].type()) * logN;
-      if (score < best) {
-        best = score;
-        k = j;
-      }
-    }
-    return k;
-  };
   const double cap = std::pow(eps / scales.position, 2);
-  std::size_t chosen = lowest(cap, true);
+  const double bulkCap = std::min(cap, kRawSelectionSigmas * kRawSelectionSigmas);
   // A raw scan's points between a few sigma and eps are mostly edges' mixed
   // pixels and blended corners, and its normals there are smeared; they can
   // outweigh the bulk, so that a bent cone, a sphere or a small cylinder that
@@ -492,12 +485,23 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   // type, it is taken. (Where they prefer a more complex one, the two costs
   // disagree and the data do not support it either: a concave corner's
   // blended points fit a small cylinder closer than either face.)
-  if (raw) {
-    const std::size_t bulk =
-        lowest(std::min(cap, kRawSelectionSigmas * kRawSelectionSigmas), false);
-    if (parameterCount(candidates[bulk].type()) < parameterCount(candidates[chosen].type())) {
-      chosen = bulk;
+  std::size_t chosen = 0, bulk = 0;
+  double bestFull = std::numeric_limits<double>::infinity(), bestBulk = bestFull;
+  for (std::size_t j = 0; j < candidates.size(); ++j) {
+    const double penalty = parameterCount(candidates[j].type()) * logN;
+    const SelectionCosts c = selectionCosts(cloud, shape.inliers, candidates[j], scales, cap,
+                                            bulkCap, raw, o.normalThreshold);
+    if (c.full + penalty < bestFull) {
+      bestFull = c.full + penalty;
+      chosen = j;
     }
+    if (raw && c.bulk + penalty < bestBulk) {
+      bestBulk = c.bulk + penalty;
+      bulk = j;
+    }
+  }
+  if (raw && parameterCount(candidates[bulk].type()) < parameterCount(candidates[chosen].type())) {
+    chosen = bulk;
   }
   std::vector<std::uint32_t> inliers = std::move(shape.inliers);
   shape = std::move(candidates[chosen]);
