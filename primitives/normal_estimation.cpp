@@ -1,12 +1,16 @@
 #include "primitives/normal_estimation.h"
 
 #include <CGAL/Eigen_svd.h>
+#include <CGAL/Default_diagonalize_traits.h>
 #include <CGAL/Monge_via_jet_fitting.h>
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -27,8 +31,112 @@
 namespace csgvox {
 namespace {
 
+// Neighbourhoods of up to this many points have their jets fitted on
+// fixed-capacity matrices (jetNormal); larger ones by CGAL's general fitting.
+constexpr int kJetMaxPoints = 64;
+// Degree of the jet (a quadric, as CGAL's jet_estimate_normals by default).
+constexpr std::size_t kJetDegree = 2;
+
+void checkJetPoints(std::size_t n) {
+  if (n < 6) {
+    throw std::invalid_argument("a jet of degree 2 needs at least 6 points (has " +
+                                std::to_string(n) + ")");
+  }
+}
+
+}  // namespace
+
+Vec3 generalJetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood) {
+  checkJetPoints(hood.size());
+  std::vector<cgal::Point3> local;
+  local.reserve(hood.size());
+  for (std::uint32_t j : hood) local.emplace_back(points[j].x(), points[j].y(), points[j].z());
+  CGAL::Monge_via_jet_fitting<cgal::Kernel, cgal::Kernel, CGAL::Eigen_svd> fit;
+  const cgal::Vector3 normal = fit(local.begin(), local.end(), kJetDegree, 1).normal_direction();
+  return Vec3(normal.x(), normal.y(), normal.z()).normalized();
+}
+
+// As CGAL's Monge_via_jet_fitting with jet degree 2 and Monge degree 1: the
+// same sums and diagonalisation for the principal frame, the same
+// preconditioned system; on fixed-capacity matrices (no allocation per
+// point, where the general fitting allocates about ten times), solved by a
+// QR where the system has full rank.
+Vec3 jetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood) {
+  checkJetPoints(hood.size());
+  const int n = int(hood.size());
+  if (n > kJetMaxPoints) return generalJetNormal(points, hood);
+  double sumX = 0.0, sumY = 0.0, sumZ = 0.0, sumX2 = 0.0, sumY2 = 0.0, sumZ2 = 0.0;
+  double sumXY = 0.0, sumXZ = 0.0, sumYZ = 0.0;
+  for (std::uint32_t j : hood) {
+    const double x = points[j].x(), y = points[j].y(), z = points[j].z();
+    sumX += x / n;
+    sumY += y / n;
+    sumZ += z / n;
+    sumX2 += x * x / n;
+    sumY2 += y * y / n;
+    sumZ2 += z * z / n;
+    sumXY += x * y / n;
+    sumXZ += x * z / n;
+    sumYZ += y * z / n;
+  }
+  const std::array<double, 6> covariance = {
+      sumX2 - sumX * sumX, sumXY - sumX * sumY, sumXZ - sumX * sumZ,
+      sumY2 - sumY * sumY, sumYZ - sumY * sumZ, sumZ2 - sumZ * sumZ};
+  std::array<double, 3> values{};
+  std::array<double, 9> vectors{};
+  CGAL::Default_diagonalize_traits<double, 3>::diagonalize_selfadjoint_covariance_matrix(
+      covariance, values, vectors);
+  // Axes by decreasing variance; the sign of the first does not change the
+  // normal (x and a_x both flip).
+  const Eigen::Vector3d e0(vectors[6], vectors[7], vectors[8]);
+  const Eigen::Vector3d e1(vectors[3], vectors[4], vectors[5]);
+  const Eigen::Vector3d e2(vectors[0], vectors[1], vectors[2]);
+  using Local = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kJetMaxPoints, 3>;
+  Local local(n, 3);
+  const Vec3& origin = points[hood[0]];
+  double precond = 0.0;
+  for (int r = 0; r < n; ++r) {
+    const Eigen::Vector3d d = points[hood[std::size_t(r)]] - origin;
+    local(r, 0) = e0.dot(d);
+    local(r, 1) = e1.dot(d);
+    local(r, 2) = e2.dot(d);
+    precond += std::abs(local(r, 0)) + std::abs(local(r, 1));
+  }
+  precond /= 2.0 * n;
+  using System = Eigen::Matrix<double, Eigen::Dynamic, 6, 0, kJetMaxPoints, 6>;
+  using Rhs = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kJetMaxPoints, 1>;
+  System m(n, 6);
+  Rhs z(n);
+  const double p2 = precond * precond;
+  for (int r = 0; r < n; ++r) {
+    const double x = local(r, 0), y = local(r, 1);
+    m(r, 0) = 1.0;
+    m(r, 1) = x / precond;
+    m(r, 2) = y / precond;
+    m(r, 3) = x * x / (2.0 * p2);
+    m(r, 4) = x * y / p2;
+    m(r, 5) = y * y / (2.0 * p2);
+    z(r) = local(r, 2);
+  }
+  // A full-rank system (nearly always) has one least-squares solution,
+  // which a QR gives at a fraction of the SVD's cost; a rank-deficient one
+  // takes the SVD's least-norm solution, as CGAL's.
+  Eigen::Matrix<double, 6, 1> a;
+  const Eigen::ColPivHouseholderQR<System> qr(m);
+  if (qr.rank() == 6) {
+    a = qr.solve(z);
+  } else {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(m),
+                                                Eigen::ComputeThinU | Eigen::ComputeThinV);
+    a = svd.solve(Eigen::VectorXd(z));
+  }
+  const double ax = a(1) / precond, ay = a(2) / precond;
+  return (-ax * e0 - ay * e1 + e2).normalized();
+}
+
+namespace {
+
 using namespace cgal;  // Kernel, Point3, Vector3
-using JetFitting = CGAL::Monge_via_jet_fitting<Kernel, Kernel, CGAL::Eigen_svd>;
 
 // Closest point pairs that decide how a piece is oriented against the
 // largest piece.
@@ -55,8 +163,6 @@ constexpr double kFlatNeighbourhood = 0.25;
 constexpr std::size_t kAgreementMaxBall = 6144;
 constexpr std::size_t kAgreementBudget = 4000 * 19;
 constexpr std::size_t kAgreementMinSamples = 250;
-// Degree of the jet (a quadric, as CGAL's jet_estimate_normals by default).
-constexpr std::size_t kJetDegree = 2;
 // dominantPlane counts a neighbour on a face's plane within this fraction of
 // the neighbourhood's radius (or kOnPlaneNoiseFactor x the noise), and
 // refuses triples whose sides' sine is below kCollinearSine.
@@ -168,7 +274,6 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
     std::vector<std::uint32_t> hood;
     std::vector<double> d2;
-    std::vector<Point3> local;
     for (std::size_t at = range.begin(); at != range.end(); ++at) {
       const std::size_t i = nn.order()[at];  // neighbours visited together: cache-friendly
       // (never short: n > k); the previous point's neighbours bound the
@@ -179,10 +284,8 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
       std::copy(hood.begin(), hood.begin() + k, hoods.indices.begin() + std::ptrdiff_t(i * k));
       hoods.radius[i] = std::sqrt(d2[k - 1]);
       if (!spansSurface(points, hood)) continue;
-      local.clear();
-      for (std::uint32_t j : hood) local.emplace_back(points[j].x(), points[j].y(), points[j].z());
-      JetFitting fit;
-      const Vector3 normal = fit(local.begin(), local.end(), kJetDegree, 1).normal_direction();
+      const Vec3 unit = jetNormal(points, hood);
+      const Vector3 normal(unit.x(), unit.y(), unit.z());
       if (isUsable(normal)) normals[i] = normal / std::sqrt(normal.squared_length());
     }
   });

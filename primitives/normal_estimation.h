@@ -1,6 +1,9 @@
 #pragma once
 /// Normal estimation for scans that come without normals.
 
+#include <cstdint>
+#include <vector>
+
 #include "core/point_cloud.h"
 
 namespace csgvox {
@@ -36,6 +39,20 @@ namespace csgvox {
 ///        particular, if all its points are at one position), or if no
 ///        neighbourhood spans a surface (all points on a line).
 void estimateNormals(PointCloud& cloud, int neighbors);
+
+/// The unit normal, unoriented, of a jet (a quadric) fitted to the points
+/// `hood` of `points`, the first of them the origin of the fit: as CGAL's
+/// Monge_via_jet_fitting (jet degree 2, Monge degree 1) gives it, to
+/// rounding, at about a quarter of its cost (fixed-capacity matrices, a QR
+/// where the system has full rank, the least-norm solution of an SVD where
+/// it has not). Zero when the points span no surface.
+/// @throw std::invalid_argument if `hood` has fewer than 6 points.
+Vec3 jetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood);
+
+/// The same normal by CGAL's general jet fitting (dynamic matrices, an SVD
+/// per point): what jetNormal gives for more than 64 points.
+/// @throw std::invalid_argument if `hood` has fewer than 6 points.
+Vec3 generalJetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood);
 
 /// How far a cloud's own normals agree with its local surface: the fraction
 /// of the points whose normal lies within 30 degrees, sign ignored, of the

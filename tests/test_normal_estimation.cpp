@@ -7,14 +7,18 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "core/nearest_neighbors.h"
 #include "io/scan_reader.h"
 #include "mesh/surface_sampler.h"
 #include "primitives/normal_estimation.h"
@@ -149,6 +153,65 @@ TEST(EstimateNormals, NarrowWallsKeepTheirFacesNormals) {
   }
   ASSERT_GT(walls, 3000u);
   EXPECT_GE(double(right) / double(walls), 0.8) << right << " of " << walls;
+}
+
+// jetNormal reproduces CGAL's general jet fitting (generalJetNormal) to
+// rounding, sign included, on the neighbourhoods estimateNormals fits: a raw
+// scanner scan's (noise, mixed pixels, outliers), of 7 to 64 points.
+TEST(JetNormal, MatchesCgalsGeneralFittingOnARawScan) {
+  ReadOptions raw;
+  raw.removeOutliers = false;
+  const std::vector<Vec3> points =
+      readScan(fs::path(CSGVOX_DATA_DIR) / "knob" / "scan_scanner.ply", raw).cloud.points;
+  ASSERT_GT(points.size(), 10000u);
+  const NearestNeighbors nn(points);
+  std::vector<std::uint32_t> hood;
+  double worst = 0.0;
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < points.size(); i += 37) {
+    for (std::size_t k : {7, 19, 40, 64}) {
+      nn.kNearest(points[i], k, hood);
+      const Vec3 fast = jetNormal(points, hood);
+      const Vec3 general = generalJetNormal(points, hood);
+      ASSERT_TRUE(general.allFinite()) << "point " << i << ", " << k << " neighbours";
+      worst = std::max(worst, (fast - general).norm());
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 1000u);
+  EXPECT_LT(worst, 1e-9) << "largest difference over " << compared << " neighbourhoods";
+}
+
+// Where the quadric is not determined (five distinct points, each twice:
+// rank 5 for 6 coefficients), both take the least-norm solution; more than
+// 64 points take CGAL's fitting; fewer than 6 are refused.
+TEST(JetNormal, RankDeficientLargeAndTooSmallNeighbourhoods) {
+  const std::vector<Vec3> points{Vec3(0.0, 0.0, 0.0), Vec3(1.0, 0.1, 0.05), Vec3(0.2, 1.0, -0.03),
+                                 Vec3(-0.9, 0.3, 0.08), Vec3(0.4, -1.1, 0.02)};
+  const std::vector<std::uint32_t> twice{0, 1, 2, 3, 4, 0, 1, 2, 3, 4};
+  const Vec3 fast = jetNormal(points, twice);
+  ASSERT_TRUE(fast.allFinite());
+  EXPECT_NEAR(fast.norm(), 1.0, 1e-12);
+  EXPECT_LT((fast - generalJetNormal(points, twice)).norm(), 1e-9) << fast.transpose();
+
+  // A cap of a sphere of radius 2: the normal at its pole is radial.
+  std::vector<Vec3> cap{Vec3(0.0, 0.0, 2.0)};
+  for (int a = 0; a < 10; ++a) {
+    for (int b = 1; b <= 8; ++b) {
+      const double phi = 0.02 * b, theta = 2.0 * std::numbers::pi * (a + 0.1 * b) / 10.0;
+      cap.emplace_back(2.0 * std::sin(phi) * std::cos(theta), 2.0 * std::sin(phi) * std::sin(theta),
+                       2.0 * std::cos(phi));
+    }
+  }
+  std::vector<std::uint32_t> all(cap.size());
+  std::iota(all.begin(), all.end(), 0u);
+  ASSERT_GT(all.size(), 64u);
+  EXPECT_GT(std::abs(jetNormal(cap, all).z()), 1.0 - 1e-9);
+  EXPECT_EQ(jetNormal(cap, all), generalJetNormal(cap, all));
+
+  const std::vector<std::uint32_t> five{0, 1, 2, 3, 4};
+  EXPECT_THROW(jetNormal(cap, five), std::invalid_argument);
+  EXPECT_THROW(generalJetNormal(cap, five), std::invalid_argument);
 }
 
 }  // namespace
