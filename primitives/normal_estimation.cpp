@@ -37,6 +37,17 @@ constexpr int kJetMaxPoints = 64;
 // Degree of the jet (a quadric, as CGAL's jet_estimate_normals by default).
 constexpr std::size_t kJetDegree = 2;
 
+// A neighbourhood spans a surface when its second principal variance exceeds
+// this fraction of its first (else it is a line up to rounding, and a jet
+// fitted to it would be meaningless).
+constexpr double kLineVarianceRatio = 1e-12;
+
+/// True when the points spread in two directions, beyond rounding.
+bool spansSurface(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood) {
+  const Vec3 variances = principalAxes(points, hood).variances;
+  return variances[0] > 0.0 && variances[1] > kLineVarianceRatio * variances[0];
+}
+
 void checkJetPoints(std::size_t n) {
   if (n < 6) {
     throw std::invalid_argument("a jet of degree 2 needs at least 6 points (has " +
@@ -63,6 +74,7 @@ Vec3 generalJetNormal(const std::vector<Vec3>& points, const std::vector<std::ui
 // QR where the system has full rank.
 Vec3 jetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood) {
   checkJetPoints(hood.size());
+  if (!spansSurface(points, hood)) return Vec3::Zero();
   const int n = int(hood.size());
   if (n > kJetMaxPoints) return generalJetNormal(points, hood);
   double sumX = 0.0, sumY = 0.0, sumZ = 0.0, sumX2 = 0.0, sumY2 = 0.0, sumZ2 = 0.0;
@@ -91,32 +103,32 @@ Vec3 jetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>
   const Eigen::Vector3d e0(vectors[6], vectors[7], vectors[8]);
   const Eigen::Vector3d e1(vectors[3], vectors[4], vectors[5]);
   const Eigen::Vector3d e2(vectors[0], vectors[1], vectors[2]);
-  using Local = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kJetMaxPoints, 3>;
-  Local local(n, 3);
-  const Vec3& origin = points[hood[0]];
-  double precond = 0.0;
-  for (int r = 0; r < n; ++r) {
-    const Eigen::Vector3d d = points[hood[std::size_t(r)]] - origin;
-    local(r, 0) = e0.dot(d);
-    local(r, 1) = e1.dot(d);
-    local(r, 2) = e2.dot(d);
-    precond += std::abs(local(r, 0)) + std::abs(local(r, 1));
-  }
-  precond /= 2.0 * n;
+  // The points in that frame, the first at the origin: x and y go into
+  // the system's linear columns, to be scaled once the preconditioning (the
+  // mean of |x| and |y|) is known.
   using System = Eigen::Matrix<double, Eigen::Dynamic, 6, 0, kJetMaxPoints, 6>;
   using Rhs = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kJetMaxPoints, 1>;
   System m(n, 6);
   Rhs z(n);
+  const Vec3& origin = points[hood[0]];
+  double precond = 0.0;
+  for (int r = 0; r < n; ++r) {
+    const Eigen::Vector3d d = points[hood[std::size_t(r)]] - origin;
+    m(r, 1) = e0.dot(d);
+    m(r, 2) = e1.dot(d);
+    z(r) = e2.dot(d);
+    precond += std::abs(m(r, 1)) + std::abs(m(r, 2));
+  }
+  precond /= 2.0 * n;
   const double p2 = precond * precond;
   for (int r = 0; r < n; ++r) {
-    const double x = local(r, 0), y = local(r, 1);
+    const double x = m(r, 1), y = m(r, 2);
     m(r, 0) = 1.0;
     m(r, 1) = x / precond;
     m(r, 2) = y / precond;
     m(r, 3) = x * x / (2.0 * p2);
     m(r, 4) = x * y / p2;
     m(r, 5) = y * y / (2.0 * p2);
-    z(r) = local(r, 2);
   }
   // A full-rank system (nearly always) has one least-squares solution,
   // which a QR gives at a fraction of the SVD's cost; a rank-deficient one
@@ -197,10 +209,6 @@ constexpr std::size_t kWallGateSamples = 50000;
 // 0.1 %, far from the 2 % it would have to cross.
 constexpr std::size_t kWallCoarseSamples = 10000;
 constexpr double kWallCoarseMargin = 2.0;
-// A neighbourhood spans a surface when its second principal variance exceeds
-// this fraction of its first (else it is a line up to rounding, and a jet
-// fitted to it would be meaningless).
-constexpr double kLineVarianceRatio = 1e-12;
 
 /// The distinct positions of a scan in order of first appearance, and for
 /// every point the index of its position.
@@ -242,12 +250,6 @@ bool isUsable(const Vector3& n) {
   return std::isfinite(len2) && len2 > 1e-24;
 }
 
-/// True when the points spread in two directions, beyond rounding.
-bool spansSurface(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood) {
-  const Vec3 variances = principalAxes(points, hood).variances;
-  return variances[0] > 0.0 && variances[1] > kLineVarianceRatio * variances[0];
-}
-
 /// The k nearest neighbours of every point, the point itself first.
 struct Neighbourhoods {
   unsigned k = 0;
@@ -283,8 +285,7 @@ Neighbourhoods fitJets(const std::vector<Vec3>& points, const NearestNeighbors& 
       std::iter_swap(hood.begin(), std::find(hood.begin(), hood.end(), std::uint32_t(i)));
       std::copy(hood.begin(), hood.begin() + k, hoods.indices.begin() + std::ptrdiff_t(i * k));
       hoods.radius[i] = std::sqrt(d2[k - 1]);
-      if (!spansSurface(points, hood)) continue;
-      const Vec3 unit = jetNormal(points, hood);
+      const Vec3 unit = jetNormal(points, hood);  // zero where they span no surface
       const Vector3 normal(unit.x(), unit.y(), unit.z());
       if (isUsable(normal)) normals[i] = normal / std::sqrt(normal.squared_length());
     }

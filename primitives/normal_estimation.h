@@ -45,12 +45,14 @@ void estimateNormals(PointCloud& cloud, int neighbors);
 /// Monge_via_jet_fitting (jet degree 2, Monge degree 1) gives it, to
 /// rounding, at about a quarter of its cost (fixed-capacity matrices, a QR
 /// where the system has full rank, the least-norm solution of an SVD where
-/// it has not). Zero when the points span no surface.
+/// it has not). Zero when the points span no surface (their second
+/// principal variance at most 1e-12 of their first: a line up to rounding).
 /// @throw std::invalid_argument if `hood` has fewer than 6 points.
 Vec3 jetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood);
 
 /// The same normal by CGAL's general jet fitting (dynamic matrices, an SVD
-/// per point): what jetNormal gives for more than 64 points.
+/// per point), without jetNormal's test for a line: what jetNormal gives
+/// for more than 64 points that span a surface.
 /// @throw std::invalid_argument if `hood` has fewer than 6 points.
 Vec3 generalJetNormal(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& hood);
 

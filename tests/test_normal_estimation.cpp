@@ -184,7 +184,8 @@ TEST(JetNormal, MatchesCgalsGeneralFittingOnARawScan) {
 
 // Where the quadric is not determined (five distinct points, each twice:
 // rank 5 for 6 coefficients), both take the least-norm solution; more than
-// 64 points take CGAL's fitting; fewer than 6 are refused.
+// 64 points take CGAL's fitting; points on a line get none; fewer than 6
+// are refused.
 TEST(JetNormal, RankDeficientLargeAndTooSmallNeighbourhoods) {
   const std::vector<Vec3> points{Vec3(0.0, 0.0, 0.0), Vec3(1.0, 0.1, 0.05), Vec3(0.2, 1.0, -0.03),
                                  Vec3(-0.9, 0.3, 0.08), Vec3(0.4, -1.1, 0.02)};
@@ -208,6 +209,13 @@ TEST(JetNormal, RankDeficientLargeAndTooSmallNeighbourhoods) {
   ASSERT_GT(all.size(), 64u);
   EXPECT_GT(std::abs(jetNormal(cap, all).z()), 1.0 - 1e-9);
   EXPECT_EQ(jetNormal(cap, all), generalJetNormal(cap, all));
+
+  // Points on a line (up to rounding) span no surface: no normal.
+  std::vector<Vec3> line;
+  for (int s = 0; s < 12; ++s) line.push_back(Vec3(100.0, -50.0, 20.0) + 0.1 * s * Vec3(1.0, 2.0, 3.0));
+  std::vector<std::uint32_t> along(line.size());
+  std::iota(along.begin(), along.end(), 0u);
+  EXPECT_EQ(jetNormal(line, along), Vec3::Zero());
 
   const std::vector<std::uint32_t> five{0, 1, 2, 3, 4};
   EXPECT_THROW(jetNormal(cap, five), std::invalid_argument);
