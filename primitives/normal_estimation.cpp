@@ -622,20 +622,29 @@ bool sharpenAtEdges(const std::vector<Point3>& points, std::vector<Vector3>& nor
           std::max(kOnPlaneRadiusFraction * hoods.radius[i], kOnPlaneNoiseFactor * typical);
       const double faceTolerance =
           std::max(kFacePlaneRadiusFraction * hoods.radius[i], kOnPlaneNoiseFactor * typical);
-      // Neighbours within the tolerance of the plane through `origin` with `normal`.
-      auto support = [&](const Point3& origin, const Vector3& normal) {
-        int count = 0;
+      // Neighbours within the tolerance of the plane through `origin` with
+      // `normal`; the count stops, at `beat` or less, once it can no longer
+      // exceed `beat`.
+      auto support = [&](const Point3& origin, const Vector3& normal, int beat) {
+        int count = 0, missed = 0;
+        const int mayMiss = int(k) - beat - 1;
         for (unsigned l = 0; l < k; ++l) {
-          if (std::abs(normal * (points[hood[l]] - origin)) <= tolerance) ++count;
+          if (std::abs(normal * (points[hood[l]] - origin)) <= tolerance) {
+            ++count;
+          } else if (++missed > mayMiss) {
+            break;
+          }
         }
         return count;
       };
       std::size_t chosen = i;
-      int best = support(points[i], normals[i]);
-      for (unsigned c = 1; c < k; ++c) {
+      int best = support(points[i], normals[i], -1);
+      // No plane holds more than all k neighbours: where the point's own
+      // does (most points: those of smooth faces), the search ends.
+      for (unsigned c = 1; c < k && best < int(k); ++c) {
         const std::size_t j = hood[c];
         if (std::abs(normals[j] * (points[i] - points[j])) > tolerance) continue;
-        const int count = support(points[j], normals[j]);
+        const int count = support(points[j], normals[j], best);
         if (count > best) {
           best = count;
           chosen = j;
