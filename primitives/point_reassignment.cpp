@@ -109,11 +109,12 @@ class CellGrid {
 }  // namespace
 
 void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_t minPoints,
-                    bool connectedPatches) {
+                    bool connectedPatches, bool normalNoiseTest) {
   const double eps = result.epsilon;
   const double cell = result.clusterEpsilon;
   const FitScales scales = fitScales(result);
   const double threshold = result.normalThreshold;
+  bool noiseTest = scales.normal > 0.0;
   std::vector<Surface>& surfaces = result.surfaces;
   std::vector<char> alive(surfaces.size(), 1);
   result.assignment.assign(cloud.size(), -1);
@@ -125,7 +126,7 @@ void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_
     for (std::size_t s = 0; s < surfaces.size(); ++s) {
       if (!alive[s] || surfaceDistance(surfaces[s], p) > eps || !allowed(s)) continue;
       const PointFit fit = pointFit(surfaces[s], p, cloud.normals[i], scales);
-      if (fit.cosine < threshold || (scales.normal > 0.0 && fit.normal2 > kNormalChi2)) continue;
+      if (fit.cosine < threshold || (noiseTest && fit.normal2 > kNormalChi2)) continue;
       const double score = std::pow(fit.distance / scales.position, 2) + fit.normal2;
       if (score < bestScore) {
         best = int(s);
@@ -192,6 +193,18 @@ void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_
       }
     }
     if (!dropped) break;
+  }
+  // Without the normal noise test, the points left over go to the surfaces
+  // that live by it, by distance and the cosine threshold alone: a strip of
+  // blended normals along an edge that RANSAC took for a surface of its own
+  // does not live on them.
+  if (noiseTest && !normalNoiseTest) {
+    noiseTest = false;
+    tbb::parallel_for(std::size_t(0), cloud.size(), [&](std::size_t i) {
+      if (result.assignment[i] < 0) {
+        result.assignment[i] = bestSurface(i, [](std::size_t) { return true; });
+      }
+    });
   }
   // Compact: keep the live surfaces in order.
   std::vector<int> newIndex(surfaces.size(), -1);

@@ -329,7 +329,7 @@ void fitSurfaces(const PointCloud& cloud, DetectionResult& result, const Surface
   if (options.splitSteps) splitSteps(cloud, result, options, fits);
   if (options.reassign) {
     reassignPoints(cloud, result, std::max<std::size_t>(1, result.minPoints),
-                   options.connectedPatches);
+                   options.connectedPatches, options.normalNoiseTest);
     fitAll(cloud, result, options, fits);
   }
   // Final bookkeeping: rms and centroids on the final inliers.

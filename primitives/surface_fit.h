@@ -26,6 +26,9 @@ struct SurfaceFitOptions {
   bool reassign = true;  ///< re-assign points to the nearest compatible surface, then re-fit
   bool connectedPatches = true;    ///< the re-assignment keeps a surface's points only on its
                                    ///< connected patches (see reassignPoints)
+  bool normalNoiseTest = true;     ///< the re-assignment also holds a point's normal to the
+                                   ///< normal noise, not only to the cosine threshold (see
+                                   ///< reassignPoints)
   bool removeRedundant = true;     ///< drop surfaces whose points other surfaces explain as well
   double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least
                                    ///< this share of its inliers (fraction)
@@ -146,7 +149,12 @@ Vec3 surfaceNormal(const Surface& surface, const Vec3& p);
 /// Assigns every point to the surface it fits best (smallest scaled squared
 /// distance plus PointFit::normal2) among those it lies on (pointOnSurface
 /// with fitScales(result), result.epsilon and result.normalThreshold), or to
-/// none. With `connectedPatches`, as in detection, a surface's points must
+/// none. Without `normalNoiseTest`, the points left over once the surfaces
+/// that live are settled go to them by distance and the cosine threshold
+/// alone (PointFit::normal2 still ranks the surfaces): a raw scan's normals
+/// within a few neighbourhoods of an edge blend the two faces, far beyond
+/// the noise measured inside the faces, and the strips of them RANSAC takes
+/// for surfaces of their own still die by the noise test. With `connectedPatches`, as in detection, a surface's points must
 /// form connected patches (cells of side result.clusterEpsilon that touch):
 /// when a surface has a patch of at least `minPoints` points, its points in
 /// smaller patches (noise of other surfaces reaching into its band away from
@@ -156,7 +164,7 @@ Vec3 surfaceNormal(const Surface& surface, const Vec3& p);
 /// `minPoints` inliers (their points go to the next best surface). Surfaces
 /// keep their order.
 void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_t minPoints,
-                    bool connectedPatches = true);
+                    bool connectedPatches = true, bool normalNoiseTest = true);
 
 /// Refines every surface of `result` on its inliers (fitSurface with
 /// fitScales), removes redundant surfaces (those whose points other surfaces

@@ -30,17 +30,12 @@ struct KnownGap {
 const std::vector<KnownGap> kKnownGaps = {
     {"bearing_housing", 0.94,
      "IoU 0.994, 14 primitives for 11: detection fits the boss's 45-degree chamfer band (3 mm "
-     "tall) as two convex spheres centred on the axis (radius 43.7 and 40.4; over so narrow a "
+     "tall) as two convex spheres centred on the axis (radius 43.6 and 39.9; over so narrow a "
      "band a sphere is within the noise of the cone and has fewer parameters) and finds no "
      "cone (one on the uniform scan), and the fillet as three concave tori (major radius "
-     "38.3-39.4, minor 6.5-6.9, for 38 and 6) (0.717 when 40 % of the spherical seat's normals "
+     "38.4-38.8, minor 6.8-7.3, for 38 and 6) (0.717 when 40 % of the spherical seat's normals "
      "pointed inward and the tree filled "
      "the bore, before undecided patches took their decided neighbours' side)"},
-    {"knob", 0.91,
-     "IoU 0.961, 9 primitives for 6: the labels fill the D-shaped bore (2/3 of a circle, its "
-     "flat's points inside the disc; detection fits its sparse wall with 22 inliers in 3 of "
-     "12 sectors, so the bore opening leaves it to the winding number) and the radial "
-     "set-screw hole (2 voxels across); 1587 and 568 of the 2488 false inside voxels"},
 };
 
 const KnownGap* knownGap(const std::string& part) {
