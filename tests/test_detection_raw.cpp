@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+#include <vector>
+
 #include "io/scan_reader.h"
 #include "io/tree_json.h"
 #include "mesh/surface_sampler.h"
@@ -146,6 +149,30 @@ TEST(DetectionOnEstimatedNormals, ScannerScansOfPrismaticPartsHaveNoCurvedExtras
       }
       EXPECT_EQ(curved, 0u) << part << " seed " << seed << ": " << found.message;
     }
+  }
+}
+
+// Between the stages, a raw scan's points within a few neighbourhoods of an
+// edge, whose normals blend the two faces by more than the noise measured
+// inside them, go to their faces once the surfaces that live by the noise
+// test are settled. Held to that noise, those bands were left to the later
+// stages: the bundled scanner scans of these parts were explained to 88.6,
+// 76.1, 85.3 and 91.1 % (seed 1, 13, 24, 13 and 8 surfaces); now to 99.5,
+// 95.2, 98.9 and 98.8 % with 13, 23, 13 and 8.
+TEST(DetectionOnEstimatedNormals, EdgeBandsGoToTheirFaces) {
+  const std::vector<std::pair<const char*, std::size_t>> parts = {
+      {"l_bracket", 13}, {"housing_complex", 24}, {"rotated_block", 13}, {"pipe_tee", 8}};
+  for (const auto& [part, surfacesBefore] : parts) {
+    const Scan scan = readScan(test::dataDir() / part / "scan_scanner.ply");
+    ASSERT_TRUE(scan.info.normalsEstimated) << part;
+    DetectOptions options;
+    options.estimatedNormals = true;
+    const DetectionResult found = detectSurfaces(scan.cloud, options);
+    ASSERT_TRUE(found.ok()) << part << ": " << found.message;
+    std::size_t explained = 0;
+    for (const Surface& s : found.surfaces) explained += s.inliers.size();
+    EXPECT_GE(double(explained), 0.94 * double(scan.cloud.size())) << part << ": " << found.message;
+    EXPECT_LE(found.surfaces.size(), surfacesBefore) << part << ": " << found.message;
   }
 }
 
