@@ -114,19 +114,20 @@ void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_
   const double cell = result.clusterEpsilon;
   const FitScales scales = fitScales(result);
   const double threshold = result.normalThreshold;
-  bool noiseTest = scales.normal > 0.0;
   std::vector<Surface>& surfaces = result.surfaces;
   std::vector<char> alive(surfaces.size(), 1);
   result.assignment.assign(cloud.size(), -1);
-  // The surface point i fits best among the live ones that `allowed` accepts, or -1.
-  const auto bestSurface = [&](std::size_t i, const auto& allowed) {
+  // The surface point i fits best among the live ones that `allowed` accepts, or -1;
+  // with `noiseTest`, its normal must also lie within the normal noise.
+  const auto bestSurface = [&](std::size_t i, const auto& allowed, bool noiseTest = true) {
     const Vec3& p = cloud.points[i];
     int best = -1;
     double bestScore = std::numeric_limits<double>::infinity();
     for (std::size_t s = 0; s < surfaces.size(); ++s) {
       if (!alive[s] || surfaceDistance(surfaces[s], p) > eps || !allowed(s)) continue;
       const PointFit fit = pointFit(surfaces[s], p, cloud.normals[i], scales);
-      if (fit.cosine < threshold || (noiseTest && fit.normal2 > kNormalChi2)) continue;
+      if (fit.cosine < threshold || (noiseTest && scales.normal > 0.0 && fit.normal2 > kNormalChi2))
+        continue;
       const double score = std::pow(fit.distance / scales.position, 2) + fit.normal2;
       if (score < bestScore) {
         best = int(s);
@@ -198,11 +199,11 @@ void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_
   // that live by it, by distance and the cosine threshold alone: a strip of
   // blended normals along an edge that RANSAC took for a surface of its own
   // does not live on them.
-  if (noiseTest && !normalNoiseTest) {
-    noiseTest = false;
+  if (!normalNoiseTest && scales.normal > 0.0) {
     tbb::parallel_for(std::size_t(0), cloud.size(), [&](std::size_t i) {
       if (result.assignment[i] < 0) {
-        result.assignment[i] = bestSurface(i, [](std::size_t) { return true; });
+        result.assignment[i] = bestSurface(
+            i, [](std::size_t) { return true; }, false);
       }
     });
   }

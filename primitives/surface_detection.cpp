@@ -686,14 +686,16 @@ std::vector<Stage> ransacStages(const DetectOptions& options, std::size_t minPoi
 
 // Settles the surfaces found so far: drops redundant ones, gives every point
 // to the surface that explains it best, re-fits. `subset` becomes the
-// unassigned points, which later stages search. On a raw scan a point goes
-// to a surface by its distance and the cosine threshold alone: within a few
-// neighbourhoods of an edge its normal blends the two faces beyond the
-// noise measured inside them, and held to that noise those bands (a fifth
-// of the points of a thin-walled part) were left to the later stages, which
-// searched them for small spurious cylinders, cones and tori. (The final
-// assignment, detectAndFit's fit, holds the normals to the noise again: the
-// stages after detection read a surface's inliers as its seen extent.)
+// unassigned points, which later stages search. On a raw scan the points
+// left over once the surfaces are settled go to them by distance and the
+// cosine threshold alone (reassignPoints without the normal noise test):
+// within a few neighbourhoods of an edge a normal blends the two faces
+// beyond the noise measured inside them, and held to that noise those bands
+// (a fifth of the points of a thin-walled part) were left to the later
+// stages, which searched them for small spurious cylinders, cones and tori.
+// (The final assignment, detectAndFit's fit, holds the normals to the noise
+// again: the stages after detection read a surface's inliers as its seen
+// extent.)
 void settle(const PointCloud& cloud, DetectionResult& result, std::vector<Surface>& found,
             std::vector<std::uint32_t>& subset, FitMemo& memo, bool raw) {
   result.surfaces = std::move(found);

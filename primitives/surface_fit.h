@@ -154,8 +154,8 @@ Vec3 surfaceNormal(const Surface& surface, const Vec3& p);
 /// alone (PointFit::normal2 still ranks the surfaces): a raw scan's normals
 /// within a few neighbourhoods of an edge blend the two faces, far beyond
 /// the noise measured inside the faces, and the strips of them RANSAC takes
-/// for surfaces of their own still die by the noise test. With `connectedPatches`, as in detection, a surface's points must
-/// form connected patches (cells of side result.clusterEpsilon that touch):
+/// for surfaces of their own still die by the noise test. With `connectedPatches`, as in detection,
+/// a surface's points must form connected patches (cells of side result.clusterEpsilon that touch):
 /// when a surface has a patch of at least `minPoints` points, its points in
 /// smaller patches (noise of other surfaces reaching into its band away from
 /// it) go to the best other surface whose patch they touch, or to none.
