@@ -1,6 +1,7 @@
 #include "evolve/redundancy.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -212,7 +213,112 @@ std::vector<CsgTree> simplerVariants(const CsgTree& tree, const NodePath& path) 
   return out;
 }
 
+// The node at `path`'s operand k removed (an operation left with one operand
+// replaced by it).
+CsgTree withoutOperand(const CsgTree& tree, const NodePath& path, std::size_t k) {
+  const NodePtr& node = tree.nodeAt(path);
+  std::vector<NodePtr> rest = node->children;
+  rest.erase(rest.begin() + std::ptrdiff_t(k));
+  const NodePtr replacement =
+      rest.size() == 1 ? rest.front() : std::make_shared<const Node>(node->kind, std::move(rest));
+  return path.empty() ? CsgTree(replacement) : tree.replaceSubtree(path, CsgTree(replacement));
+}
+
+// A box holding every point where removing the node's operand k can change
+// the solid: the operand's bounds for a union member, those met with what a
+// cutter cuts for a difference, the others' for an intersection.
+Aabb changeBox(const Node& node, std::size_t k) {
+  if (node.kind == NodeKind::Union) return CsgTree(node.children[k]).bounds();
+  if (node.kind == NodeKind::Difference) {
+    return CsgTree(node.children[k]).bounds().intersected(CsgTree(node.children[0]).bounds());
+  }
+  std::vector<NodePtr> others = node.children;
+  others.erase(others.begin() + std::ptrdiff_t(k));
+  return CsgTree(others.size() == 1 ? others.front()
+                                    : std::make_shared<const Node>(NodeKind::Intersection,
+                                                                   std::move(others)))
+      .bounds();
+}
+
+// Whether `a` and `b` disagree on less than `minVolume` within `box`,
+// counted on a lattice of `spacing` (see withoutNegligibleOperands). The
+// lattice is turned against the axes, so that a plate thinner than its
+// spacing and parallel to them is counted by its volume, not missed between
+// two layers of points.
+bool differOnLess(const CsgTree& a, const CsgTree& b, const Aabb& box, double spacing,
+                  double minVolume) {
+  constexpr double kMaxPoints = double(1u << 18);
+  if (box.isEmpty()) return true;
+  const Vec3 size = box.max - box.min;
+  if (!size.allFinite()) return false;
+  const Mat3 turn = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  // The box in the lattice's frame.
+  Aabb frame;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? box.max.x() : box.min.x(), (c & 2) ? box.max.y() : box.min.y(),
+                      (c & 4) ? box.max.z() : box.min.z());
+    frame.extend(Vec3(turn.transpose() * corner));
+  }
+  const Vec3 span = frame.max - frame.min;
+  const double cells = span.prod() / (spacing * spacing * spacing);
+  const double s = cells > kMaxPoints ? spacing * std::cbrt(cells / kMaxPoints) : spacing;
+  const double allowed = minVolume / (s * s * s);  // lattice points
+  if (allowed < 1.0) return false;
+  std::array<std::size_t, 3> n{};
+  for (int k = 0; k < 3; ++k) n[k] = std::max<std::size_t>(1, std::size_t(std::ceil(span[k] / s)));
+  const std::size_t total = n[0] * n[1] * n[2];
+  // Batches of points spread over the whole box, so a change anywhere in it
+  // is found within the first few.
+  constexpr std::size_t kBatch = 4096;
+  const std::size_t stride = (total + kBatch - 1) / kBatch;
+  std::vector<Vec3> points;
+  std::vector<double> va, vb;
+  std::size_t differing = 0;
+  for (std::size_t first = 0; first < stride; ++first) {
+    points.clear();
+    for (std::size_t i = first; i < total; i += stride) {
+      const std::size_t x = i % n[0], y = (i / n[0]) % n[1], z = i / (n[0] * n[1]);
+      const Vec3 p =
+          turn * Vec3(frame.min + s * Vec3(double(x) + 0.5, double(y) + 0.5, double(z) + 0.5));
+      if ((p.array() >= box.min.array()).all() && (p.array() <= box.max.array()).all())
+        points.push_back(p);
+    }
+    if (points.empty()) continue;
+    va.resize(points.size());
+    vb.resize(points.size());
+    a.values(points, va);
+    b.values(points, vb);
+    for (std::size_t i = 0; i < points.size(); ++i) differing += (va[i] >= 0.0) != (vb[i] >= 0.0);
+    if (double(differing) >= allowed) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+CsgTree withoutNegligibleOperands(const CsgTree& tree, double spacing, double minVolume) {
+  if (tree.empty() || !(spacing > 0.0) || !(minVolume > 0.0)) return tree;
+  CsgTree current = tree;
+  bool removed = true;
+  while (removed) {
+    removed = false;
+    for (const NodePath& path : nodePaths(current)) {
+      const Node& node = *current.nodeAt(path);
+      if (node.kind == NodeKind::Primitive || node.kind == NodeKind::Complement) continue;
+      for (std::size_t k = node.kind == NodeKind::Difference ? 1 : 0; k < node.children.size();
+           ++k) {
+        CsgTree variant = withoutOperand(current, path, k);
+        if (differOnLess(current, variant, changeBox(node, k), spacing, minVolume)) {
+          current = std::move(variant);
+          removed = true;
+          break;
+        }
+      }
+      if (removed) break;
+    }
+  }
+  return current;
+}
 
 CsgTree normalizeTree(const CsgTree& tree) {
   if (tree.empty()) return tree;

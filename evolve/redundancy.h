@@ -32,6 +32,19 @@ CsgTree normalizeTree(const CsgTree& tree);
 /// write half-spaces as finite solids must otherwise cut it exactly.
 CsgTree withoutEmptySubtrees(const CsgTree& tree);
 
+/// The tree without the operands (a union's members, a difference's cutters, an
+/// intersection's operands) whose removal changes less than `minVolume` of its
+/// solid. The change is measured by counting the points of a lattice of
+/// `spacing` (coarser where the box the operand can change holds more than
+/// 2^18 of them) over that box, at which the tree and the tree without the
+/// operand disagree, each point standing for spacing³; an operand whose box is
+/// unbounded, or whose lattice is too coarse to resolve `minVolume`, is kept.
+/// Operands are tried in depth-first order, and the search starts again after
+/// each removal. Not exact: each removal may change the solid by up to
+/// `minVolume` (a member that only grazes the rest, a cut that only grazes what
+/// it cuts). Deterministic.
+CsgTree withoutNegligibleOperands(const CsgTree& tree, double spacing, double minVolume);
+
 /// withoutEmptySubtrees and normalizeTree, then, repeatedly, the first operation node (in
 /// depth-first order) that can be replaced by one of its operands, or lose an operand, with a
 /// fitness at least as high, is; until none can. The result's fitness is never lower than that of

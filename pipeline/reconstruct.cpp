@@ -10,6 +10,7 @@
 #include "core/cpu_time.h"
 #include "core/nearest_neighbors.h"
 #include "core/run_control.h"
+#include "evolve/redundancy.h"
 
 namespace csgvox {
 namespace {
@@ -325,6 +326,19 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
       hybridMethod(out, hy, points, options, clock, control);
     }
     out.result = std::move(hy);
+  }
+  // The voxel stage judges its members by voxels and the repair by the
+  // points, so a member that only grazes the rest (a corner of a box where
+  // another member's cylinder meets it), or a cut that only grazes what it
+  // cuts, can stay: an operand that changes less than a voxel's volume of
+  // the solid goes. The genetic baseline's tree is left as its search gave it.
+  if (options.method != Method::Gp && !out.tree.empty() && !control.cancelled()) {
+    const double h = out.grid.voxelSize();
+    const CsgTree kept = withoutNegligibleOperands(withoutEmptySubtrees(out.tree), 0.5 * h, h * h * h);
+    if (kept.primitiveCount() != out.tree.primitiveCount()) {
+      out.tree = kept;
+      out.voxels = solidVoxels(out.tree, out.grid);
+    }
   }
   if (control.cancelled()) {
     const std::string stage = out.timings.empty() ? "labels" : out.timings.back().stage;

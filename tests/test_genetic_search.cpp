@@ -252,6 +252,39 @@ TEST(Redundancy, EmptySubtreesAreThoseProvablyEmpty) {
   EXPECT_EQ(withoutEmptySubtrees(all).root(), all.root());
 }
 
+// InverseCSG 159's scanner scan gave a union member that only grazed the
+// block: a corner hole's cylinder (r 0.75 at (2.48, 2.48)) intersected with
+// a box whose corner (1.94, 3.0) lies 0.745 from its axis, a sliver of about
+// 1e-4 in volume. Members and cuts changing less than the volume given go;
+// a plate thinner than the lattice's spacing, a small hole and a shallow
+// pocket do not.
+TEST(Redundancy, OperandsThatChangeLessThanTheVolumeGiven) {
+  const CsgTree block = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(3, 3, 5)}, "block");
+  const CsgTree corner = CsgTree::leaf(Cylinder{Vec3(2.48, 2.48, 0), Vec3::UnitZ(), 0.75, 10});
+  const CsgTree beside = CsgTree::leaf(Box{Vec3(0, 8, 0), Mat3::Identity(), Vec3(1.94, 5, 5)});
+  const CsgTree hole = CsgTree::leaf(Cylinder{Vec3(-1, -1, 0), Vec3::UnitZ(), 0.3, 10}, "hole");
+  const double h = 0.17;  // a voxel
+  const CsgTree grazing =
+      CsgTree::unite({CsgTree::subtract({block, hole}), CsgTree::intersect({corner, beside})});
+  const CsgTree pruned = withoutNegligibleOperands(grazing, 0.5 * h, h * h * h);
+  EXPECT_TRUE(pruned.structurallyEqual(CsgTree::subtract({block, hole}))) << pruned.primitiveCount();
+  // A cut that grazes the block's side (0.001 deep: 5e-4 in volume).
+  const CsgTree nick = CsgTree::leaf(Cylinder{Vec3(3.749, 0, 0), Vec3::UnitZ(), 0.75, 10});
+  EXPECT_TRUE(withoutNegligibleOperands(CsgTree::subtract({block, hole, nick}), 0.5 * h, h * h * h)
+                  .structurallyEqual(CsgTree::subtract({block, hole})));
+  // Kept: a plate on the block's side a fifth of the lattice's spacing thick
+  // and parallel to the axes (2 x 1 in area: 0.034, 7 voxels' volume), the
+  // small hole, a pocket 0.1 deep (a cut of 0.4).
+  const CsgTree thin = CsgTree::leaf(Box{Vec3(0, 3.5, 0), Mat3::Identity(), Vec3(1, 0.5, 0.0085)});
+  const CsgTree pocket = CsgTree::leaf(Box{Vec3(0, 0, 4.95), Mat3::Identity(), Vec3(1, 1, 0.05)});
+  const CsgTree kept = CsgTree::subtract({CsgTree::unite({block, thin}), hole, pocket});
+  EXPECT_EQ(withoutNegligibleOperands(kept, 0.5 * h, h * h * h).root(), kept.root());
+  // An operand whose box is unbounded is kept.
+  const CsgTree below = CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 6.0});
+  const CsgTree clipped = CsgTree::intersect({block, below});
+  EXPECT_EQ(withoutNegligibleOperands(clipped, 0.5 * h, h * h * h).root(), clipped.root());
+}
+
 // The tree of a scanned plate of bosses (data/regressions): its subtree
 // difference(cylinder9, halfspace5) is empty, the cylinder (radius 214.8,
 // reaching x = 489 beside a part 150 wide) lying under the plane. It goes,
