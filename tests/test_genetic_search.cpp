@@ -279,9 +279,18 @@ TEST(Redundancy, OperandsThatChangeLessThanTheVolumeGiven) {
   const CsgTree pocket = CsgTree::leaf(Box{Vec3(0, 0, 4.95), Mat3::Identity(), Vec3(1, 1, 0.05)});
   const CsgTree kept = CsgTree::subtract({CsgTree::unite({block, thin}), hole, pocket});
   EXPECT_EQ(withoutNegligibleOperands(kept, 0.5 * h, h * h * h).root(), kept.root());
-  // An operand whose box is unbounded is kept.
-  const CsgTree below = CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 6.0});
-  const CsgTree clipped = CsgTree::intersect({block, below});
+  // A half-space that cuts nothing of a cube goes; the cube, whose box (the
+  // half-space's bounds) is unbounded, stays.
+  const CsgTree cube = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(1, 1, 1)}, "cube");
+  const CsgTree below = CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 1.5});
+  EXPECT_TRUE(withoutNegligibleOperands(CsgTree::intersect({cube, below}), 0.5 * h, h * h * h)
+                  .structurallyEqual(cube));
+  // Nor does a lattice too coarse to resolve the volume drop anything: the
+  // same intersection with a block 60 x 60 x 100 (2^18 points over its box
+  // stand more than a voxel's volume each).
+  const CsgTree slab = CsgTree::leaf(Box{Vec3::Zero(), Mat3::Identity(), Vec3(30, 30, 50)});
+  const CsgTree far = CsgTree::leaf(HalfSpace{Vec3::UnitZ(), 60.0});
+  const CsgTree clipped = CsgTree::intersect({slab, far});
   EXPECT_EQ(withoutNegligibleOperands(clipped, 0.5 * h, h * h * h).root(), clipped.root());
 }
 
