@@ -192,6 +192,17 @@ NodePtr pruneEmpty(const NodePtr& node) {
   return provablyEmpty(pruned) ? nullptr : pruned;
 }
 
+// The tree with the operation at `path` without its operand k (an operation
+// left with one operand replaced by it).
+CsgTree withoutOperand(const CsgTree& tree, const NodePath& path, std::size_t k) {
+  const NodePtr& node = tree.nodeAt(path);
+  std::vector<NodePtr> rest = node->children;
+  rest.erase(rest.begin() + std::ptrdiff_t(k));
+  return tree.replaceSubtree(
+      path, CsgTree(rest.size() == 1 ? rest.front()
+                                     : std::make_shared<const Node>(node->kind, std::move(rest))));
+}
+
 // The variants of the tree with the operation at `path` simplified: replaced
 // by each operand, or (n-ary) without one operand.
 std::vector<CsgTree> simplerVariants(const CsgTree& tree, const NodePath& path) {
@@ -204,24 +215,10 @@ std::vector<CsgTree> simplerVariants(const CsgTree& tree, const NodePath& path) 
     for (std::size_t k = 0; k < node->children.size(); ++k) {
       // The first operand of a difference is what the others are cut from.
       if (node->kind == NodeKind::Difference && k == 0) continue;
-      std::vector<NodePtr> rest = node->children;
-      rest.erase(rest.begin() + std::ptrdiff_t(k));
-      out.push_back(tree.replaceSubtree(
-          path, CsgTree(std::make_shared<const Node>(node->kind, std::move(rest)))));
+      out.push_back(withoutOperand(tree, path, k));
     }
   }
   return out;
-}
-
-// The node at `path`'s operand k removed (an operation left with one operand
-// replaced by it).
-CsgTree withoutOperand(const CsgTree& tree, const NodePath& path, std::size_t k) {
-  const NodePtr& node = tree.nodeAt(path);
-  std::vector<NodePtr> rest = node->children;
-  rest.erase(rest.begin() + std::ptrdiff_t(k));
-  const NodePtr replacement =
-      rest.size() == 1 ? rest.front() : std::make_shared<const Node>(node->kind, std::move(rest));
-  return path.empty() ? CsgTree(replacement) : tree.replaceSubtree(path, CsgTree(replacement));
 }
 
 // A box holding every point where removing the node's operand k can change
@@ -234,9 +231,9 @@ Aabb changeBox(const Node& node, std::size_t k) {
   }
   std::vector<NodePtr> others = node.children;
   others.erase(others.begin() + std::ptrdiff_t(k));
-  return CsgTree(others.size() == 1 ? others.front()
-                                    : std::make_shared<const Node>(NodeKind::Intersection,
-                                                                   std::move(others)))
+  return CsgTree(others.size() == 1
+                     ? others.front()
+                     : std::make_shared<const Node>(NodeKind::Intersection, std::move(others)))
       .bounds();
 }
 

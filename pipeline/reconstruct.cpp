@@ -334,7 +334,8 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   // the solid goes. The genetic baseline's tree is left as its search gave it.
   if (options.method != Method::Gp && !out.tree.empty() && !control.cancelled()) {
     const double h = out.grid.voxelSize();
-    const CsgTree kept = withoutNegligibleOperands(withoutEmptySubtrees(out.tree), 0.5 * h, h * h * h);
+    const CsgTree kept =
+        withoutNegligibleOperands(withoutEmptySubtrees(out.tree), 0.5 * h, h * h * h);
     if (kept.primitiveCount() != out.tree.primitiveCount()) {
       out.tree = kept;
       out.voxels = solidVoxels(out.tree, out.grid);

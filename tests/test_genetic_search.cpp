@@ -267,7 +267,8 @@ TEST(Redundancy, OperandsThatChangeLessThanTheVolumeGiven) {
   const CsgTree grazing =
       CsgTree::unite({CsgTree::subtract({block, hole}), CsgTree::intersect({corner, beside})});
   const CsgTree pruned = withoutNegligibleOperands(grazing, 0.5 * h, h * h * h);
-  EXPECT_TRUE(pruned.structurallyEqual(CsgTree::subtract({block, hole}))) << pruned.primitiveCount();
+  EXPECT_TRUE(pruned.structurallyEqual(CsgTree::subtract({block, hole})))
+      << pruned.primitiveCount();
   // A cut that grazes the block's side (0.001 deep: 5e-4 in volume).
   const CsgTree nick = CsgTree::leaf(Cylinder{Vec3(3.749, 0, 0), Vec3::UnitZ(), 0.75, 10});
   EXPECT_TRUE(withoutNegligibleOperands(CsgTree::subtract({block, hole, nick}), 0.5 * h, h * h * h)
