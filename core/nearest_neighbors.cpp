@@ -1,5 +1,9 @@
 #include "core/nearest_neighbors.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -43,17 +47,22 @@ std::vector<std::uint32_t> spatialOrder(std::span<const Vec3> points) {
     }
   }
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint64_t key = 0;
-    if (points[i].allFinite() && !box.isEmpty()) {
-      for (int a = 0; a < 3; ++a) {
-        const double c = std::clamp((points[i][a] - box.min[a]) * scale[a], 0.0, top);
-        key |= spreadBits(std::uint64_t(c)) << a;
-      }
-    }
-    keyed[i] = {key, std::uint32_t(i)};
-  }
-  std::sort(keyed.begin(), keyed.end());
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          std::uint64_t key = 0;
+          if (points[i].allFinite() && !box.isEmpty()) {
+            for (int a = 0; a < 3; ++a) {
+              const double c = std::clamp((points[i][a] - box.min[a]) * scale[a], 0.0, top);
+              key |= spreadBits(std::uint64_t(c)) << a;
+            }
+          }
+          keyed[i] = {key, std::uint32_t(i)};
+        }
+      });
+  // The keys are distinct (each holds its index): one order, however the
+  // sort splits its work.
+  tbb::parallel_sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> order(n);
   for (std::size_t j = 0; j < n; ++j) order[j] = keyed[j].second;
   return order;

@@ -1,5 +1,8 @@
 #include "core/tree_program.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,6 +15,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kChunk = 256;      // points per batch: the scratch stack stays in cache
+constexpr std::size_t kChunksPerTask = 8;  // batches a thread takes at once in values()
 constexpr double kRoundingSlack = 1e-9;  // relative slack on computed bounds
 
 // Euclidean distance between two boxes (0 when they overlap).
@@ -166,37 +170,49 @@ void TreeProgram::runValues(std::span<const Vec3> points, std::span<double> out,
                             const Ops& ops) const {
   const auto unite = [&ops](double a, double b) { return ops.unite(a, b); };
   const auto intersect = [&ops](double a, double b) { return ops.intersect(a, b); };
-  std::vector<double> scratch(stackDepth_ * kChunk);
-  for (std::size_t start = 0; start < points.size(); start += kChunk) {
-    const std::size_t n = std::min(kChunk, points.size() - start);
-    const std::span<const Vec3> chunk = points.subspan(start, n);
-    std::size_t top = 0;  // number of arrays on the stack
+  // Chunks [c0, c1) with a scratch stack of their own: every value is its
+  // point's alone, so splitting the chunks among threads changes nothing.
+  const auto run = [&](std::size_t c0, std::size_t c1) {
+    std::vector<double> scratch(stackDepth_ * kChunk);
     const auto array = [&](std::size_t i) { return scratch.data() + i * kChunk; };
-    for (const Step& step : steps_) {
-      switch (step.op) {
-        case Op::Leaf:
-          leaves_->primitives[step.leaf].values(chunk, std::span<double>(array(top++), n));
-          break;
-        case Op::Constant:
-          std::fill_n(array(top++), n, step.constant);
-          break;
-        case Op::Negate: {
-          double* a = array(top - 1);
-          for (std::size_t i = 0; i < n; ++i) a[i] = -a[i];
-          break;
+    for (std::size_t start = c0 * kChunk; start < std::min(c1 * kChunk, points.size());
+         start += kChunk) {
+      const std::size_t n = std::min(kChunk, points.size() - start);
+      const std::span<const Vec3> chunk = points.subspan(start, n);
+      std::size_t top = 0;  // number of arrays on the stack
+      for (const Step& step : steps_) {
+        switch (step.op) {
+          case Op::Leaf:
+            leaves_->primitives[step.leaf].values(chunk, std::span<double>(array(top++), n));
+            break;
+          case Op::Constant:
+            std::fill_n(array(top++), n, step.constant);
+            break;
+          case Op::Negate: {
+            double* a = array(top - 1);
+            for (std::size_t i = 0; i < n; ++i) a[i] = -a[i];
+            break;
+          }
+          case Op::Unite:
+            --top;
+            combine(array(top - 1), array(top), n, unite);
+            break;
+          case Op::Intersect:
+            --top;
+            combine(array(top - 1), array(top), n, intersect);
+            break;
         }
-        case Op::Unite:
-          --top;
-          combine(array(top - 1), array(top), n, unite);
-          break;
-        case Op::Intersect:
-          --top;
-          combine(array(top - 1), array(top), n, intersect);
-          break;
       }
+      std::copy_n(array(0), n, out.begin() + static_cast<std::ptrdiff_t>(start));
     }
-    std::copy_n(array(0), n, out.begin() + static_cast<std::ptrdiff_t>(start));
+  };
+  const std::size_t chunks = (points.size() + kChunk - 1) / kChunk;
+  if (chunks < 2 * kChunksPerTask) {
+    run(0, chunks);
+    return;
   }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, kChunksPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) { run(r.begin(), r.end()); });
 }
 
 void TreeProgram::values(std::span<const Vec3> points, std::span<double> out,

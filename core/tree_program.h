@@ -29,7 +29,9 @@ class TreeProgram {
   double value(const Vec3& p) const;
   /// Value and gradient at p with min/max.
   FieldValue evaluate(const Vec3& p) const;
-  /// out[i] = value at points[i] with the set operations `ops`.
+  /// out[i] = value at points[i] with the set operations `ops`. From 4096
+  /// points on, the points are split among the threads (TBB); every value is
+  /// its point's alone, so the values are the same on any number of threads.
   /// @throw std::invalid_argument when the spans differ in size, or for
   ///        SetOperationKind::Sardf (which needs a radius: pass the
   ///        SardfOperations object to the overload below).

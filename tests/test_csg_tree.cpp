@@ -3,6 +3,7 @@
 // immutable subtrees.
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <limits>
@@ -530,6 +531,32 @@ TEST(TreeEvaluation, BatchedValuesMatchOnRandomTreesAndOddSizes) {
   EXPECT_EQ(empty[0], -std::numeric_limits<double>::infinity());
   std::vector<double> tooShort(1);
   EXPECT_THROW(plateWithHoles().values(std::vector<Vec3>(2), tooShort), std::invalid_argument);
+}
+
+// From 4096 points on, values() splits the points among threads: the values
+// are those of one thread, and of value() point by point, on any number.
+TEST(TreeEvaluation, LargeBatchesGiveTheSameValuesOnAnyNumberOfThreads) {
+  Rng rng(23);
+  for (int t = 0; t < 4; ++t) {
+    const CsgTree tree = test::randomTree(rng, 3 + 2 * t);
+    std::vector<Vec3> points;
+    for (std::size_t i = 0; i < 20000 + 77 * std::size_t(t); ++i) {
+      points.push_back(test::randomPoint(rng, Aabb{Vec3::Constant(-5), Vec3::Constant(5)}));
+    }
+    std::vector<double> one(points.size()), many(points.size(), 12345.0);
+    {
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+      tree.values(points, one);
+    }
+    {
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+      tree.values(points, many);
+    }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      ASSERT_EQ(many[i], one[i]) << t << " " << i;
+      ASSERT_EQ(many[i], tree.value(points[i])) << t << " " << i;
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------

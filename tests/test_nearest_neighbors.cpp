@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <limits>
@@ -123,6 +124,19 @@ TEST(NearestNeighbors, OrderIsAPermutationThatKeepsNeighboursTogether) {
     asPassed += (p[j] - p[j - 1]).norm();
   }
   EXPECT_LT(inOrder, 0.1 * asPassed);
+}
+
+// The order is the same however many threads compute and sort the keys.
+TEST(NearestNeighbors, SpatialOrderIsTheSameOnAnyNumberOfThreads) {
+  std::vector<Vec3> p = randomPoints(30000, 12);
+  p.insert(p.end(), p.begin(), p.begin() + 500);  // copies: ties go by index
+  std::vector<std::uint32_t> one;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = spatialOrder(p);
+  }
+  const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+  EXPECT_EQ(spatialOrder(p), one);
 }
 
 TEST(NearestNeighbors, SpatialOrderHandlesFlatAndDegenerateSets) {
