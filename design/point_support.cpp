@@ -1,5 +1,8 @@
 #include "design/point_support.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -26,19 +29,26 @@ PointSupport pointSupport(const CsgTree& tree, std::span<const Vec3> points,
   const std::vector<const Node*> ordered = tree.distinctLeaves();
   s.leaf.assign(points.size(), nullptr);
   s.gradient.assign(points.size(), Vec3::Zero());
-  std::vector<double> best(points.size(), band);
-  std::vector<double> v(points.size());
-  for (const Node* leaf : ordered) {
-    leaf->primitive.values(points, v);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      if (std::abs(f[i]) > band || !(std::abs(v[i]) < best[i])) continue;
-      best[i] = std::abs(v[i]);
-      s.leaf[i] = leaf;
-    }
-  }
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (s.leaf[i]) s.leaf[i]->primitive.valueAndGradient(points[i], s.gradient[i]);
-  }
+  // Each point's leaf is its own (the leaves in order, the first nearest
+  // kept): blocks of points on any thread give the same.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      const std::span<const Vec3> block = points.subspan(r.begin(), r.size());
+                      std::vector<double> best(r.size(), band), v(r.size());
+                      for (const Node* leaf : ordered) {
+                        leaf->primitive.values(block, v);
+                        for (std::size_t j = 0; j < r.size(); ++j) {
+                          const std::size_t i = r.begin() + j;
+                          if (std::abs(f[i]) > band || !(std::abs(v[j]) < best[j])) continue;
+                          best[j] = std::abs(v[j]);
+                          s.leaf[i] = leaf;
+                        }
+                      }
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        if (s.leaf[i])
+                          s.leaf[i]->primitive.valueAndGradient(points[i], s.gradient[i]);
+                      }
+                    });
   return s;
 }
 

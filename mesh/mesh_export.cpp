@@ -5,6 +5,7 @@
 #include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -503,7 +504,7 @@ void sharpenVertices(const NearField& field, const Lattice& lattice, const openv
     for (int k = 0; k < 3; ++k) key = (key << 21) | (static_cast<std::uint64_t>(c[k]) & 0x1fffffu);
     cells[v] = {key, static_cast<std::uint32_t>(v)};
   }
-  std::sort(cells.begin(), cells.end());
+  tbb::parallel_sort(cells.begin(), cells.end());  // distinct pairs: one order
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const auto& range) {
     const auto levelSet = grid.getConstUnsafeAccessor();  // read-only: safe to share the tree
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
