@@ -1,6 +1,13 @@
 #include "job/job.h"
 
+#include <pthread.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
+#include <time.h>
+
+#include <algorithm>
 #include <cstdio>
+#include <mutex>
 #include <optional>
 
 #include "cad/step_export.h"
@@ -44,61 +51,160 @@ Fitness pointFitness(const CsgTree& tree, const Scan& scan, const JobOptions& op
   return treeFitness(tree, scan.cloud.points, scan.cloud.normals, scan.cloud.diagonal(), fo);
 }
 
-// tree.step and preview.png. The tree is the result: a solid OpenCASCADE
-// cannot build is tried from the fitted tree when `tree` is the designed
-// one, and then costs tree.step only (one error line naming the node, a
-// warning in the report), not the job.
-void writeCadOutputs(OutputSet& output, const Scan& scan, const CsgTree& tree,
-                     const CsgTree* fitted, const TriangleMesh& mesh, const JobOptions& options,
-                     StepTimes& timings, nlohmann::ordered_json& warnings,
-                     const RunControl& control) {
-  Stopwatch watch;
-  if (!stepExportAvailable()) {
-    output.skip("tree.step");
-    warnings.push_back("tree.step: not written: this build has no OpenCASCADE");
-  } else {
-    StepOptions so;
-    so.control = control;
-    try {
-      writeStep(output.path("tree.step"), tree, so);
-    } catch (const CadError& e) {
-      // OpenCASCADE fails on some exact coincidences the designed values
-      // make; the fitted tree (the same solid within its IoU) may pass.
-      bool written = false;
-      if (fitted && !fitted->empty()) {
-        try {
-          writeStep(output.path("tree.step"), *fitted, so);
-          written = true;
-          warnings.push_back(std::string("tree.step: written from the fitted values: the designed "
-                                         "tree's solid failed: ") +
-                             e.what());
-        } catch (const CadError&) {
-        }
-      }
-      if (!written) {
-        output.skip("tree.step");
-        std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", e.what());
-        warnings.push_back(std::string("tree.step: not written: ") + e.what());
+// What writing tree.step came to: written or not, the warnings to report
+// (and the error line to print when it was not written), its seconds.
+struct StepOutcome {
+  bool written = false;
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+  std::string error;  ///< non-empty: tree.step is not written, for this reason
+  double seconds = 0.0, cpuSeconds = 0.0;
+};
+
+// tree.step. The tree is the result: a solid OpenCASCADE cannot build is
+// tried from the fitted tree when `tree` is the designed one, and then costs
+// tree.step only (one error line naming the node, a warning in the report),
+// not the job.
+StepOutcome writeStepFile(const std::filesystem::path& path, const CsgTree& tree,
+                          const CsgTree* fitted, const RunControl& control) {
+  StepOutcome out;
+  StepOptions so;
+  so.control = control;
+  try {
+    writeStep(path, tree, so);
+    out.written = true;
+  } catch (const CadError& e) {
+    // OpenCASCADE fails on some exact coincidences the designed values
+    // make; the fitted tree (the same solid within its IoU) may pass.
+    if (fitted && !fitted->empty()) {
+      try {
+        writeStep(path, *fitted, so);
+        out.written = true;
+        out.warnings.push_back(std::string("tree.step: written from the fitted values: the "
+                                           "designed tree's solid failed: ") +
+                               e.what());
+      } catch (const CadError&) {
       }
     }
+    if (!out.written) {
+      out.error = e.what();
+      out.warnings.push_back(std::string("tree.step: not written: ") + e.what());
+    }
   }
-  timings.add("step", watch.seconds(), watch.cpuSeconds());
-  if (!options.preview) {
-    output.skip("preview.png");
-    return;
-  }
-  watch = Stopwatch();
-  writePng(output.path("preview.png"), renderPreview(tree, mesh, &scan.cloud).image);
-  timings.add("preview", watch.seconds(), watch.cpuSeconds());
+  return out;
 }
 
-// Every file of the job but report.json; `ctx` gains the export, step and
-// preview timings and any warning. With a design, tree.json, tree.scad and
-// tree.txt are its parametric forms and `tree` is its world tree.
+// The CPU seconds of one thread's work so far, read from any thread: the
+// work's thread reads its clock while it runs; its total once done.
+class ThreadWorkCpu {
+ public:
+  void begin() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    running_ = pthread_getcpuclockid(pthread_self(), &clock_) == 0;
+    start_ = running_ ? read(clock_) : 0.0;
+  }
+  void end() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (running_) total_ = read(clock_) - start_;
+    running_ = false;
+  }
+  double seconds() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return running_ ? read(clock_) - start_ : total_;
+  }
+
+ private:
+  static double read(clockid_t clock) {
+    timespec t{};
+    clock_gettime(clock, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+  }
+  mutable std::mutex mutex_;
+  clockid_t clock_{};
+  double start_ = 0.0, total_ = 0.0;
+  bool running_ = false;
+};
+
+// tree.step built on a task of its own (OpenCASCADE works on one thread)
+// while the calling thread writes the other files, meshes, draws the preview
+// and measures the tree: with two threads or more its seconds leave the
+// job's critical path; with one the task runs at wait(). The stages of the
+// calling thread run isolated (stage()), so that thread never takes the task
+// up inside one of them, and their CPU seconds leave out the task's
+// (BesideStopwatch).
+class StepTask {
+ public:
+  StepTask(std::filesystem::path path, const CsgTree& tree, const CsgTree* fitted,
+           const RunControl& control) {
+    group_.run([this, path = std::move(path), &tree, fitted, &control] {
+      const Stopwatch watch;
+      cpu_.begin();
+      try {
+        outcome_ = writeStepFile(path, tree, fitted, control);
+      } catch (...) {
+        cpu_.end();
+        throw;
+      }
+      cpu_.end();
+      outcome_.seconds = watch.seconds();
+      outcome_.cpuSeconds = cpu_.seconds();
+    });
+  }
+  StepTask(const StepTask&) = delete;
+  StepTask& operator=(const StepTask&) = delete;
+  // On the way out of a failed stage: the task still ends before its tree.
+  ~StepTask() {
+    try {
+      group_.wait();
+    } catch (...) {
+    }
+  }
+
+  /// Runs `body` on the calling thread, isolated from the task.
+  template <class Body>
+  void stage(const Body& body) {
+    tbb::this_task_arena::isolate(body);
+  }
+  /// The CPU seconds of the task so far.
+  double taskCpu() const { return cpu_.seconds(); }
+
+  /// The outcome, once the task has ended (its exception rethrown).
+  StepOutcome wait() {
+    group_.wait();
+    return outcome_;
+  }
+
+ private:
+  tbb::task_group group_;
+  ThreadWorkCpu cpu_;
+  StepOutcome outcome_;
+};
+
+// Wall-clock and CPU seconds of a stage that runs beside a StepTask: the
+// process's CPU seconds less the task's over the stage.
+class BesideStopwatch {
+ public:
+  explicit BesideStopwatch(const StepTask* beside)
+      : beside_(beside), besideStart_(beside ? beside->taskCpu() : 0.0) {}
+  double seconds() const { return watch_.seconds(); }
+  double cpuSeconds() const {
+    const double own = watch_.cpuSeconds();
+    return beside_ ? std::max(0.0, own - (beside_->taskCpu() - besideStart_)) : own;
+  }
+
+ private:
+  const StepTask* beside_;
+  double besideStart_;
+  Stopwatch watch_;
+};
+
+// Every file of the job but tree.step and report.json; `ctx` gains the
+// export and preview timings. With a design, tree.json, tree.scad and
+// tree.txt are its parametric forms and `tree` is its world tree. tree.step
+// is written beside it (`step`, null when it is not written).
 void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
                     const DesignedTree* design, const JobOptions& options, ReportContext& ctx,
-                    const RunControl& control) {
-  Stopwatch watch;
+                    const RunControl& control, const StepTask* step) {
+  BesideStopwatch watch(step);
   if (design) {
     writeDesignedTreeJson(output.path("tree.json"), *design);
     writeDesignedScad(output.path("tree.scad"), *design);
@@ -116,8 +222,14 @@ void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
   const TriangleMesh mesh = meshTree(tree, mo, control);
   writeMesh(output.path("mesh.ply"), mesh);
   ctx.timings.add("export", watch.seconds(), watch.cpuSeconds());
-  writeCadOutputs(output, scan, tree, design ? &design->fitted : nullptr, mesh, options,
-                  ctx.timings, ctx.warnings, control);
+  ctx.timings.add("step", 0.0, 0.0);  // its place in the report; its seconds come with it
+  if (!options.preview) {
+    output.skip("preview.png");
+    return;
+  }
+  const BesideStopwatch previewWatch(step);
+  writePng(output.path("preview.png"), renderPreview(tree, mesh, &scan.cloud).image);
+  ctx.timings.add("preview", previewWatch.seconds(), previewWatch.cpuSeconds());
 }
 
 // The files written so far, in the order of jobFiles(), report.json included.
@@ -143,8 +255,9 @@ ReportContext contextOf(const std::filesystem::path& scanPath, const Scan& scan,
 
 // Measures the tree into ctx (with the metrics' seconds) and prints the fit line.
 void measureInto(ReportContext& ctx, const CsgTree& tree, double voxelIou,
-                 const JobOptions& options, const Console& console) {
-  Stopwatch watch;
+                 const JobOptions& options, const Console& console,
+                 const StepTask* beside = nullptr) {
+  BesideStopwatch watch(beside);
   ctx.metrics = measureTree(tree, *ctx.scan, voxelIou, options, ctx.warnings, console);
   ctx.timings.add("metrics", watch.seconds(), watch.cpuSeconds());
   if (const auto& fit = ctx.metrics.fit) {
@@ -186,8 +299,36 @@ nlohmann::ordered_json writeFilesAndReport(OutputSet& output, ReportContext ctx,
     console.info(fmt("design: %.0f parameters, %.0f snapped", double(design->parameters.size()),
                      double(design->snappedCount())));
   }
-  writeTreeFiles(output, *ctx.scan, tree, design ? &*design : nullptr, options, ctx, control);
-  measureInto(ctx, tree, voxelIou, options, console);
+  std::optional<StepTask> step;
+  if (stepExportAvailable()) {
+    step.emplace(output.path("tree.step"), tree, design ? &design->fitted : nullptr, control);
+  } else {
+    output.skip("tree.step");
+    ctx.warnings.push_back("tree.step: not written: this build has no OpenCASCADE");
+  }
+  const StepTask* beside = step ? &*step : nullptr;
+  std::size_t stepWarningsAt = 0;
+  const auto stages = [&] {
+    writeTreeFiles(output, *ctx.scan, tree, design ? &*design : nullptr, options, ctx, control,
+                   beside);
+    stepWarningsAt = ctx.warnings.size();
+    measureInto(ctx, tree, voxelIou, options, console, beside);
+  };
+  if (step) {
+    step->stage(stages);
+    const StepOutcome done = step->wait();
+    ctx.timings.add("step", done.seconds, done.cpuSeconds);
+    for (std::size_t k = 0; k < done.warnings.size(); ++k) {
+      ctx.warnings.insert(ctx.warnings.begin() + std::ptrdiff_t(stepWarningsAt + k),
+                          done.warnings[k]);
+    }
+    if (!done.written) {
+      output.skip("tree.step");
+      std::fprintf(stderr, "csgvox: error: tree.step not written: %s\n", done.error.c_str());
+    }
+  } else {
+    stages();
+  }
   ctx.outputs = writtenFiles(output);
   nlohmann::ordered_json report = build(ctx);
   if (design) report["design"] = designReportJson(*design, designSeconds);

@@ -47,7 +47,9 @@ TreeMetrics measureTree(const CsgTree& tree, const Scan& scan, double voxelIou,
 /// Writes a finished reconstruction's files into `output` (not committed)
 /// and returns its report (also written as report.json, whose `outputs`
 /// lists the files written). `timings` holds the wall-clock and CPU seconds of
-/// the steps before (read, ...); export, step, preview and metrics are added. preview.png is
+/// the steps before (read, ...); design, export, step, preview and metrics are added
+/// (tree.step is built on a task of its own while the other files are written and the
+/// tree is measured: with two threads or more it leaves the critical path). preview.png is
 /// skipped with options.preview off; tree.step is skipped, with one error
 /// line on stderr naming the node and a warning in the report, when
 /// OpenCASCADE cannot build the solid (or the build has no OpenCASCADE):

@@ -36,6 +36,23 @@ TEST_F(Cli, TheMainJobWritesTheCadOutputsAndListsThem) {
     expected.push_back(name);
   }
   EXPECT_EQ(outputsOf(out / "report.json"), expected);
+  // The seconds of the steps after the tree, in the order they are made;
+  // tree.step is built on a thread of its own beside the others, and its CPU
+  // seconds are that thread's (never more than its wall-clock seconds).
+  const auto report = nlohmann::ordered_json::parse(slurp(out / "report.json"));
+  std::vector<std::string> steps;
+  for (const auto& [key, seconds] : report.at("timings_s").items()) {
+    if (key == "export" || key == "step" || key == "preview" || key == "metrics") {
+      steps.push_back(key);
+    }
+    EXPECT_GE(seconds.get<double>(), 0.0) << key;
+    if (key != "refine") {
+      EXPECT_GE(report.at("cpu_s").at(key).get<double>(), 0.0) << key;
+    }
+  }
+  EXPECT_EQ(steps, (std::vector<std::string>{"export", "step", "preview", "metrics"}));
+  EXPECT_LE(report.at("cpu_s").at("step").get<double>(),
+            report.at("timings_s").at("step").get<double>() + 0.01);
 
   const CsgTree tree = readTreeJson(out / "tree.json");
   EXPECT_EQ(readCsg(out / "tree.csg").primitiveCount(), tree.primitiveCount());
