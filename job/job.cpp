@@ -138,15 +138,12 @@ class StepTask {
     group_.run([this, path = std::move(path), &tree, fitted, &control] {
       const Stopwatch watch;
       cpu_.begin();
-      try {
-        outcome_ = writeStepFile(path, tree, fitted, control);
-      } catch (...) {
-        cpu_.end();
-        throw;
-      }
-      cpu_.end();
+      const struct End {
+        ThreadWorkCpu& cpu;
+        ~End() { cpu.end(); }  // also when writeStep throws
+      } end{cpu_};
+      outcome_ = writeStepFile(path, tree, fitted, control);
       outcome_.seconds = watch.seconds();
-      outcome_.cpuSeconds = cpu_.seconds();
     });
   }
   StepTask(const StepTask&) = delete;
@@ -170,7 +167,9 @@ class StepTask {
   /// The outcome, once the task has ended (its exception rethrown).
   StepOutcome wait() {
     group_.wait();
-    return outcome_;
+    StepOutcome out = outcome_;
+    out.cpuSeconds = cpu_.seconds();
+    return out;
   }
 
  private:
@@ -200,11 +199,11 @@ class BesideStopwatch {
 // Every file of the job but tree.step and report.json; `ctx` gains the
 // export and preview timings. With a design, tree.json, tree.scad and
 // tree.txt are its parametric forms and `tree` is its world tree. tree.step
-// is written beside it (`step`, null when it is not written).
+// is written beside it (`beside`; null when this build cannot write it).
 void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
                     const DesignedTree* design, const JobOptions& options, ReportContext& ctx,
-                    const RunControl& control, const StepTask* step) {
-  BesideStopwatch watch(step);
+                    const RunControl& control, const StepTask* beside) {
+  BesideStopwatch watch(beside);
   if (design) {
     writeDesignedTreeJson(output.path("tree.json"), *design);
     writeDesignedScad(output.path("tree.scad"), *design);
@@ -227,7 +226,7 @@ void writeTreeFiles(OutputSet& output, const Scan& scan, const CsgTree& tree,
     output.skip("preview.png");
     return;
   }
-  const BesideStopwatch previewWatch(step);
+  const BesideStopwatch previewWatch(beside);
   writePng(output.path("preview.png"), renderPreview(tree, mesh, &scan.cloud).image);
   ctx.timings.add("preview", previewWatch.seconds(), previewWatch.cpuSeconds());
 }
