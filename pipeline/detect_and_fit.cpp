@@ -192,6 +192,12 @@ SurfacesAndCandidates detectAndFit(const PointCloud& scan, const DetectAndFitOpt
   }
   lap(out.fitSeconds, out.fitCpuSeconds);
   out.regularization = regularizeSurfaces(out.detection);
+  // On a raw scan a surface seen in parts (a bore at its mouths) gives
+  // several fits that regularisation makes one surface but for a tilt past
+  // its tolerance: the fits that explain each other's points merge.
+  if (raw) {
+    out.regularization.duplicatesMerged += int(mergeDuplicateSurfaces(scan, out.detection, fit));
+  }
   lap(out.regularizeSeconds, out.regularizeCpuSeconds);
   if (onStage) onStage("detect", true, out.detection.message);
 

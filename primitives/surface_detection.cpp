@@ -447,9 +447,9 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   std::vector<Surface> candidates;
   Surface refined = shape;
   if (fitSurface(cloud, shape.inliers, refined, scales, fit) >= 0.0 &&
-      plausibleSurface(refined, diag)) {
+      plausibleSurface(refined, diag, cloud, shape.inliers)) {
     candidates.push_back(refined);
-  } else if (plausibleSurface(shape, diag)) {
+  } else if (plausibleSurface(shape, diag, cloud, shape.inliers)) {
     candidates.push_back(shape);
   }
   // A plane whose inliers' normals all agree with it is a plane: no curved
@@ -468,9 +468,14 @@ bool selectModel(const PointCloud& cloud, const DetectOptions& o, const FitScale
   }
   for (SurfaceType t : o.enabled) {
     Surface alt;
-    if (!initialSurface(cloud, shape.inliers, t, alt) || !plausibleSurface(alt, diag)) continue;
-    if (fitSurface(cloud, shape.inliers, alt, scales, fit) < 0.0 || !plausibleSurface(alt, diag))
+    if (!initialSurface(cloud, shape.inliers, t, alt) ||
+        !plausibleSurface(alt, diag, cloud, shape.inliers)) {
       continue;
+    }
+    if (fitSurface(cloud, shape.inliers, alt, scales, fit) < 0.0 ||
+        !plausibleSurface(alt, diag, cloud, shape.inliers)) {
+      continue;
+    }
     candidates.push_back(std::move(alt));
   }
   if (candidates.empty()) return false;

@@ -26,24 +26,29 @@ namespace {
 
 using namespace surface_fit_detail;
 
-// True when a curved surface has flattened into a plane on a part of
-// diagonal D: a cylinder or sphere too wide to be plausible, or a cone that
-// is implausible on its flat side. (A part's straight side that RANSAC took
-// as a wide cylinder together with a strip of the round next to it fits so
-// once the round's points go to the round.)
-bool flattened(const Surface& s, double diag) {
-  if (plausibleSurface(s, diag)) return false;
+// The simpler type a curved surface has flattened into on a part of
+// diagonal D, if any: a plane for a cylinder or sphere too wide to be
+// plausible, a cone that is implausible on its flat side or wider than D
+// where its points lie; a cylinder for a cone within 2 degrees of one.
+// (A part's straight side that RANSAC took as a wide cylinder together with
+// a strip of the round next to it fits so once the round's points go to
+// the round; a cone fitted to a face's points can run its apex out far
+// beyond the part.)
+std::optional<SurfaceType> flattenedInto(const Surface& s, double diag, const PointCloud& cloud) {
+  if (plausibleSurface(s, diag, cloud, s.inliers)) return std::nullopt;
   switch (s.type()) {
     case SurfaceType::Cylinder:
     case SurfaceType::Sphere:
-      return true;
+      return SurfaceType::Plane;
     case SurfaceType::Cone:
-      return s.as<ConeSurface>()->halfAngle > 0.25 * std::numbers::pi;
+      if (plausibleSurface(s, diag) || s.as<ConeSurface>()->halfAngle > 0.25 * std::numbers::pi)
+        return SurfaceType::Plane;
+      return SurfaceType::Cylinder;
     case SurfaceType::Plane:
     case SurfaceType::Torus:
-      return false;
+      return std::nullopt;
   }
-  return false;
+  return std::nullopt;
 }
 
 // Fits every surface on its inliers (in parallel); surfaces whose fit
@@ -62,13 +67,25 @@ void fitAll(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOp
           Surface trial = surf;
           if (fitSurface(cloud, surf.inliers, trial, scales, options, &memo) >= 0.0)
             surf = std::move(trial);
-          Surface plane;
-          if (options.flattenToPlanes && diag > 0.0 && flattened(surf, diag) &&
-              initialSurface(cloud, surf.inliers, SurfaceType::Plane, plane) &&
-              fitSurface(cloud, surf.inliers, plane, scales, options, &memo) >= 0.0) {
-            plane.inliers = std::move(surf.inliers);
-            surf = std::move(plane);
+          if (!options.flattenToPlanes || !(diag > 0.0)) continue;
+          const std::optional<SurfaceType> into = flattenedInto(surf, diag, cloud);
+          if (!into) continue;
+          // A cone that became a cylinder too wide for the part is a plane.
+          Surface simpler;
+          if (*into == SurfaceType::Cylinder &&
+              (!initialSurface(cloud, surf.inliers, SurfaceType::Cylinder, simpler) ||
+               fitSurface(cloud, surf.inliers, simpler, scales, options, &memo) < 0.0 ||
+               !plausibleSurface(simpler, diag))) {
+            simpler = Surface{};
+            simpler.shape = PlaneSurface{};
           }
+          if (simpler.type() == SurfaceType::Plane &&
+              (!initialSurface(cloud, surf.inliers, SurfaceType::Plane, simpler) ||
+               fitSurface(cloud, surf.inliers, simpler, scales, options, &memo) < 0.0)) {
+            continue;
+          }
+          simpler.inliers = std::move(surf.inliers);
+          surf = std::move(simpler);
         }
       },
       tbb::simple_partitioner());
@@ -308,6 +325,98 @@ void sortBySize(DetectionResult& result) {
 }
 
 }  // namespace
+
+std::size_t mergeDuplicateSurfaces(const PointCloud& cloud, DetectionResult& result,
+                                   const SurfaceFitOptions& options) {
+  if (result.assignment.size() != cloud.size()) {
+    throw std::invalid_argument(
+        "mergeDuplicateSurfaces: the detection result belongs to another cloud");
+  }
+  std::vector<Surface>& surfaces = result.surfaces;
+  if (surfaces.size() < 2) return 0;
+  if (!cloud.hasNormals()) {
+    throw std::invalid_argument("mergeDuplicateSurfaces needs one normal per point");
+  }
+  const double eps = result.epsilon;
+  // By distance and the cosine threshold alone: the fits at a bore's mouth
+  // take the normals of the blended edge, which the normal noise measured
+  // inside the faces would call a tilt.
+  FitScales scales = fitScales(result, options);
+  scales.normal = 0.0;
+  const double cap = std::pow(eps / scales.position, 2) + kNormalChi2;
+  // removeRedundant's score of point i on surface t, by distance.
+  const auto score = [&](const Surface& t, std::uint32_t i) {
+    const Vec3& p = cloud.points[i];
+    if (surfaceDistance(t, p) > eps) return cap;
+    const PointFit fit = pointFit(t, p, cloud.normals[i], scales);
+    if (fit.cosine < result.normalThreshold || (scales.normal > 0.0 && fit.normal2 > kNormalChi2)) {
+      return cap;
+    }
+    return std::pow(fit.distance / scales.position, 2) + fit.normal2;
+  };
+  // Smallest first: a surface goes into the one of its type and convexity
+  // that explains most of its points (the larger on a tie), when that one
+  // explains them about as well as it does.
+  std::vector<std::size_t> order(surfaces.size());
+  for (std::size_t s = 0; s < order.size(); ++s) order[s] = s;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return surfaces[a].inliers.size() < surfaces[b].inliers.size();
+  });
+  std::vector<char> alive(surfaces.size(), 1);
+  std::size_t merged = 0;
+  for (std::size_t b : order) {
+    Surface& from = surfaces[b];
+    if (from.type() == SurfaceType::Plane || from.inliers.empty()) continue;
+    const double n = double(from.inliers.size());
+    int into = -1;
+    std::size_t bestExplained = 0;
+    for (std::size_t a = 0; a < surfaces.size(); ++a) {
+      const Surface& to = surfaces[a];
+      if (a == b || !alive[a] || to.type() != from.type() || to.convex != from.convex) continue;
+      std::size_t explained = 0;
+      double sum = 0.0;
+      for (std::uint32_t i : from.inliers) {
+        const double other = score(to, i);
+        explained += other < cap;
+        sum += score(from, i) - other;
+      }
+      if (double(explained) >= options.redundantFraction * n && sum / n >= -0.5 &&
+          (explained > bestExplained ||
+           (explained == bestExplained &&
+            to.inliers.size() > surfaces[std::size_t(into)].inliers.size()))) {
+        into = int(a);
+        bestExplained = explained;
+      }
+    }
+    if (into < 0) continue;
+    Surface& to = surfaces[std::size_t(into)];
+    to.inliers.insert(to.inliers.end(), from.inliers.begin(), from.inliers.end());
+    std::sort(to.inliers.begin(), to.inliers.end());
+    to.rms = rmsDistance(cloud, to.inliers, to);
+    from.inliers.clear();
+    alive[b] = 0;
+    ++merged;
+  }
+  if (merged == 0) return 0;
+  std::vector<Surface> kept;
+  for (std::size_t s = 0; s < surfaces.size(); ++s) {
+    if (alive[s]) kept.push_back(std::move(surfaces[s]));
+  }
+  surfaces = std::move(kept);
+  result.centroids.assign(surfaces.size(), Vec3::Zero());
+  std::fill(result.assignment.begin(), result.assignment.end(), -1);
+  for (std::size_t s = 0; s < surfaces.size(); ++s) {
+    Vec3 sum = Vec3::Zero();
+    for (std::uint32_t i : surfaces[s].inliers) {
+      sum += cloud.points[i];
+      result.assignment[i] = int(s);
+    }
+    if (!surfaces[s].inliers.empty())
+      result.centroids[s] = sum / double(surfaces[s].inliers.size());
+  }
+  sortBySize(result);
+  return merged;
+}
 
 void fitSurfaces(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOptions& options,
                  FitMemo* memo) {

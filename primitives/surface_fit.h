@@ -33,8 +33,10 @@ struct SurfaceFitOptions {
   double redundantFraction = 0.8;  ///< a surface is redundant when other surfaces explain at least
                                    ///< this share of its inliers (fraction)
   bool flattenToPlanes = true;     ///< a cylinder or sphere whose fitted radius exceeds the
-                                   ///< diagonal D, or a cone within 2 degrees of flat, becomes
-                                   ///< the plane of its inliers
+                                   ///< diagonal D, or a cone within 2 degrees of flat or wider
+                                   ///< than D where its inliers lie, becomes the plane of its
+                                   ///< inliers; a cone within 2 degrees of a cylinder, their
+                                   ///< cylinder (or plane, when wider than D)
   bool splitSteps = true;  ///< a cylinder (or a cone within 5 degrees of one) whose inliers lie at
                            ///< two distinct distances from its axis becomes two cylinders (a hole
                            ///< and its counterbore taken as one surface)
@@ -141,6 +143,12 @@ int parameterCount(SurfaceType type);
 /// neither within 2 degrees of flat nor of a cylinder.
 bool plausibleSurface(const Surface& s, double diag);
 
+/// plausibleSurface, and a cone no wider than `diag` where the points
+/// `indices` of the cloud lie (their mean distance from its axis): a cone
+/// whose apex lies far beyond the part is a wide cylinder or a plane there.
+bool plausibleSurface(const Surface& s, double diag, const PointCloud& cloud,
+                      std::span<const std::uint32_t> indices);
+
 /// The unit outward normal of the (unbounded) surface at p, oriented as its
 /// inliers: the plane's normal; for curved surfaces away from the axis,
 /// centre or tube centre when the surface is convex, towards it otherwise.
@@ -165,6 +173,21 @@ Vec3 surfaceNormal(const Surface& surface, const Vec3& p);
 /// keep their order.
 void reassignPoints(const PointCloud& cloud, DetectionResult& result, std::size_t minPoints,
                     bool connectedPatches = true, bool normalNoiseTest = true);
+
+/// Merges the curved surfaces that regularisation left as duplicates: a
+/// cylinder, cone, sphere or torus at least options.redundantFraction of
+/// whose inliers a surface of its type and convexity, with as many inliers
+/// or more, explains about as well (removeRedundant's test in fitSurfaces,
+/// against that one surface) gives its inliers to it, the smallest first.
+/// Two fits of one bore seen at its mouth only, one tilted a few degrees
+/// past the regularisation's tolerance, become one surface once their radii
+/// are made equal. The surfaces are not fitted again (they keep their
+/// regularised parameters); inliers, rms, centroids and the assignment
+/// follow, sorted by inlier count. Returns the number of surfaces merged.
+/// @throw std::invalid_argument when result.assignment does not match the
+///        cloud, or the cloud has no normals.
+std::size_t mergeDuplicateSurfaces(const PointCloud& cloud, DetectionResult& result,
+                                   const SurfaceFitOptions& options = {});
 
 /// Refines every surface of `result` on its inliers (fitSurface with
 /// fitScales), removes redundant surfaces (those whose points other surfaces

@@ -506,6 +506,22 @@ bool plausibleSurface(const Surface& s, double diag) {
   return false;
 }
 
+bool plausibleSurface(const Surface& s, double diag, const PointCloud& cloud,
+                      std::span<const std::uint32_t> indices) {
+  if (!plausibleSurface(s, diag)) return false;
+  const auto* cone = s.as<ConeSurface>();
+  if (cone == nullptr || indices.empty()) return true;
+  // A cone is as wide where its points lie as their mean distance from its
+  // axis: a cone whose apex lies far beyond the part is a cylinder or a
+  // plane there.
+  double sum = 0.0;
+  for (std::uint32_t i : indices) {
+    const Vec3 v = cloud.points[i] - cone->apex;
+    sum += (v - v.dot(cone->axisDir) * cone->axisDir).norm();
+  }
+  return sum <= diag * double(indices.size());
+}
+
 Vec3 surfaceNormal(const Surface& surface, const Vec3& p) {
   const Vec3 n = convexNormal(surface, p);
   return surface.convex ? n : Vec3(-n);

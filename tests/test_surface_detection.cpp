@@ -551,6 +551,137 @@ TEST(SurfaceFit, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   EXPECT_EQ(round.surfaces[0].inliers.size(), cloud.size());
 }
 
+// Points of a bore's band, radius r, heights h0 to h1 along frame column 2
+// from `origin`, with radial noise `sigma` and inward (concave) normals.
+void addBand(PointCloud& cloud, Rng& rng, const Mat3& frame, const Vec3& origin, double r,
+             double h0, double h1, double sigma, int count) {
+  std::normal_distribution<double> noise(0.0, sigma);
+  for (int i = 0; i < count; ++i) {
+    const double a = uniform(rng, 0.0, 2.0 * std::numbers::pi), h = uniform(rng, h0, h1);
+    const Vec3 radial = std::cos(a) * frame.col(0) + std::sin(a) * frame.col(1);
+    cloud.points.push_back(origin + h * frame.col(2) + (r + noise(rng)) * radial);
+    cloud.normals.push_back(-radial);
+  }
+}
+
+// A flat face's points fitted by a cone whose apex runs far beyond the part
+// (RANSAC's cone on a raw scan's floor) is the plane: a cone wider than the
+// diagonal where its points lie is not plausible, and the surface fit makes
+// it the plane of its points. A cone that narrowed to within 2 degrees of a
+// cylinder becomes the cylinder.
+TEST(SurfaceFit, AConeFarFromItsApexBecomesThePlane) {
+  Rng rng(17);
+  const Mat3 frame = randomRotation(rng);
+  const Vec3 normal = frame.col(0), offsetPoint = Vec3(-1, 0.5, 2) + 0.4 * normal;
+  PointCloud cloud;
+  for (int i = 0; i < 600; ++i) {
+    const double u = uniform(rng, -1.5, 1.5), v = uniform(rng, -1.5, 1.5);
+    cloud.points.push_back(offsetPoint + u * frame.col(1) + v * frame.col(2));
+    cloud.normals.push_back(normal);
+  }
+  std::vector<std::uint32_t> all(cloud.size());
+  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  // A cone of half-angle 16 degrees around an axis in the face, its apex
+  // 1000 away along it: about 290 wide at the points.
+  const double half = 16.0 * kDeg;
+  Surface far;
+  far.shape = ConeSurface{offsetPoint - 1000.0 * frame.col(1) - 1000.0 * std::tan(half) * normal,
+                          frame.col(1), half};
+  EXPECT_TRUE(plausibleSurface(far, 5.0));
+  EXPECT_FALSE(plausibleSurface(far, 5.0, cloud, all));
+  // The same cone 2 from its apex is 0.57 wide there: plausible.
+  Surface near = far;
+  std::get<ConeSurface>(near.shape).apex =
+      offsetPoint - 2.0 * frame.col(1) - 2.0 * std::tan(half) * normal;
+  EXPECT_TRUE(plausibleSurface(near, 5.0, cloud, all));
+
+  DetectionResult result = oneSurface(cloud, far, 5.0, 0.025);
+  fitSurfaces(cloud, result);
+  ASSERT_EQ(result.surfaces.size(), 1u);
+  const Surface& s = result.surfaces[0];
+  ASSERT_EQ(s.type(), SurfaceType::Plane) << describe(s);
+  EXPECT_EQ(s.inliers.size(), cloud.size());
+  EXPECT_GT(std::abs(s.as<PlaneSurface>()->normal.dot(normal)), 1.0 - 1e-9);
+  EXPECT_LT(s.rms, 1e-9);
+
+  // A bore of radius 1 that a cone of half-angle 0.5 degrees fits.
+  PointCloud bore;
+  addBand(bore, rng, frame, offsetPoint, 1.0, -1.0, 1.0, 0.0, 600);
+  Surface slim;
+  slim.shape = ConeSurface{offsetPoint - 114.6 * frame.col(2), frame.col(2), 0.5 * kDeg};
+  slim.convex = false;
+  DetectionResult round = oneSurface(bore, slim, 5.0, 0.025);
+  fitSurfaces(bore, round);
+  ASSERT_EQ(round.surfaces.size(), 1u);
+  ASSERT_EQ(round.surfaces[0].type(), SurfaceType::Cylinder) << describe(round.surfaces[0]);
+  EXPECT_NEAR(round.surfaces[0].as<CylinderSurface>()->radius, 1.0, 1e-6);
+  EXPECT_EQ(round.surfaces[0].inliers.size(), bore.size());
+}
+
+// Two fits of one bore's mouth, one of them tilted 3.6 degrees (past the
+// regularisation's 3), explain each other's points: they become one
+// surface, the larger fit's, with every point. Two coaxial bands whose radii
+// differ by less than the inlier distance but by many noise deviations (a
+// hole and its counterbore) stay two.
+TEST(SurfaceFit, DuplicateFitsOfOneSurfaceMerge) {
+  Rng rng(5);
+  const Mat3 frame = randomRotation(rng);
+  const Vec3 origin(3, -1, 2);
+  const double sigma = 0.063, eps = 0.65;
+  PointCloud cloud;
+  addBand(cloud, rng, frame, origin, 15.0, -1.0, 1.0, sigma, 400);
+  const auto bore = [&](const Vec3& dir, double r) {
+    Surface s;
+    s.shape = CylinderSurface{origin, dir, r};
+    s.convex = false;
+    return s;
+  };
+  const double tilt = 3.6 * kDeg;
+  DetectionResult result = oneSurface(
+      cloud, bore(std::cos(tilt) * frame.col(2) + std::sin(tilt) * frame.col(0), 15.0), 130.0, eps);
+  result.noise = sigma;
+  result.normalNoise = 0.02;
+  result.surfaces.push_back(bore(frame.col(2), 15.0));
+  // The tilted fit holds 220 of the points, the coaxial one 180.
+  Surface& tilted = result.surfaces[0];
+  result.surfaces[1].inliers.assign(tilted.inliers.begin() + 220, tilted.inliers.end());
+  tilted.inliers.resize(220);
+  for (std::uint32_t i : result.surfaces[1].inliers) result.assignment[i] = 1;
+  EXPECT_EQ(mergeDuplicateSurfaces(cloud, result), 1u);
+  ASSERT_EQ(result.surfaces.size(), 1u);
+  EXPECT_EQ(result.surfaces[0].inliers.size(), cloud.size());
+  EXPECT_NEAR(axisAngle(result.surfaces[0].as<CylinderSurface>()->axisDir, frame.col(2)), tilt,
+              1e-9);
+  ASSERT_EQ(result.centroids.size(), 1u);
+  for (int a : result.assignment) EXPECT_EQ(a, 0);
+
+  // A counterbore 0.4 wider above the hole: within eps of it, six noise
+  // deviations off.
+  PointCloud stepped;
+  addBand(stepped, rng, frame, origin, 15.0, -1.0, 1.0, sigma, 200);
+  addBand(stepped, rng, frame, origin, 15.4, 1.0, 3.0, sigma, 200);
+  DetectionResult two = oneSurface(stepped, bore(frame.col(2), 15.0), 130.0, eps);
+  two.noise = sigma;
+  two.normalNoise = 0.02;
+  two.surfaces.push_back(bore(frame.col(2), 15.4));
+  two.surfaces[1].inliers.assign(two.surfaces[0].inliers.begin() + 200,
+                                 two.surfaces[0].inliers.end());
+  two.surfaces[0].inliers.resize(200);
+  for (std::uint32_t i : two.surfaces[1].inliers) two.assignment[i] = 1;
+  EXPECT_EQ(mergeDuplicateSurfaces(stepped, two), 0u);
+  EXPECT_EQ(two.surfaces.size(), 2u);
+
+  // A boss of the bore's size (convex) is another surface.
+  DetectionResult mixed = result;
+  mixed.surfaces.push_back(bore(frame.col(2), 15.0));
+  mixed.surfaces[1].convex = true;
+  mixed.surfaces[1].inliers.assign(mixed.surfaces[0].inliers.begin() + 200,
+                                   mixed.surfaces[0].inliers.end());
+  mixed.surfaces[0].inliers.resize(200);
+  for (std::uint32_t i : mixed.surfaces[1].inliers) mixed.assignment[i] = 1;
+  EXPECT_EQ(mergeDuplicateSurfaces(cloud, mixed), 0u);
+}
+
 // Points on a tessellated hole along `axis` (frame column 2): a prism of
 // `facets` flat sides circumscribed about radius r (so the points lie between
 // r cos(pi / facets) and r from the axis) from height h0 to h1, with inward
