@@ -70,18 +70,17 @@ void fitAll(const PointCloud& cloud, DetectionResult& result, const SurfaceFitOp
           if (!options.flattenToPlanes || !(diag > 0.0)) continue;
           const std::optional<SurfaceType> into = flattenedInto(surf, diag, cloud);
           if (!into) continue;
-          // A cone that became a cylinder too wide for the part is a plane.
+          // The simpler surface fitted on the inliers; a cone whose cylinder
+          // would be too wide for the part is their plane.
           Surface simpler;
-          if (*into == SurfaceType::Cylinder &&
-              (!initialSurface(cloud, surf.inliers, SurfaceType::Cylinder, simpler) ||
-               fitSurface(cloud, surf.inliers, simpler, scales, options, &memo) < 0.0 ||
-               !plausibleSurface(simpler, diag))) {
+          const auto fits = [&](SurfaceType type) {
             simpler = Surface{};
-            simpler.shape = PlaneSurface{};
-          }
-          if (simpler.type() == SurfaceType::Plane &&
-              (!initialSurface(cloud, surf.inliers, SurfaceType::Plane, simpler) ||
-               fitSurface(cloud, surf.inliers, simpler, scales, options, &memo) < 0.0)) {
+            return initialSurface(cloud, surf.inliers, type, simpler) &&
+                   fitSurface(cloud, surf.inliers, simpler, scales, options, &memo) >= 0.0 &&
+                   plausibleSurface(simpler, diag);
+          };
+          if (!(*into == SurfaceType::Cylinder && fits(SurfaceType::Cylinder)) &&
+              !fits(SurfaceType::Plane)) {
             continue;
           }
           simpler.inliers = std::move(surf.inliers);
@@ -207,6 +206,34 @@ void splitSteps(const PointCloud& cloud, DetectionResult& result, const SurfaceF
   }
 }
 
+// The scaled squared residual of point i on surface t (removeRedundant's and
+// mergeDuplicateSurfaces' measure), or `cap` when the point is not on it.
+double explainScore(const PointCloud& cloud, const DetectionResult& result, const Surface& t,
+                    std::uint32_t i, const FitScales& scales, double cap) {
+  const Vec3& p = cloud.points[i];
+  if (surfaceDistance(t, p) > result.epsilon) return cap;
+  const PointFit fit = pointFit(t, p, cloud.normals[i], scales);
+  if (fit.cosine < result.normalThreshold || (scales.normal > 0.0 && fit.normal2 > kNormalChi2)) {
+    return cap;
+  }
+  return std::pow(fit.distance / scales.position, 2) + fit.normal2;
+}
+
+// The centroid of every surface's inliers, and the assignment from them.
+void indexInliers(const PointCloud& cloud, DetectionResult& result) {
+  result.centroids.assign(result.surfaces.size(), Vec3::Zero());
+  std::fill(result.assignment.begin(), result.assignment.end(), -1);
+  for (std::size_t s = 0; s < result.surfaces.size(); ++s) {
+    const Surface& surf = result.surfaces[s];
+    Vec3 sum = Vec3::Zero();
+    for (std::uint32_t i : surf.inliers) {
+      sum += cloud.points[i];
+      result.assignment[i] = int(s);
+    }
+    if (!surf.inliers.empty()) result.centroids[s] = sum / double(surf.inliers.size());
+  }
+}
+
 // Removes surfaces whose inliers other surfaces explain: a duplicate, a
 // plane strip cut from a large cylinder, or one flexible surface (a torus,
 // a sphere) spanning several true ones once those are found. Of the
@@ -219,15 +246,8 @@ void removeRedundant(const PointCloud& cloud, DetectionResult& result,
   std::vector<char> alive(surfaces.size(), 1);
   const FitScales scales = fitScales(result, options);
   const double cap = std::pow(eps / scales.position, 2) + kNormalChi2;
-  // Scaled squared residual of point i on surface t, or the cap when it is not on it.
   const auto score = [&](std::size_t t, std::uint32_t i) {
-    const Vec3& p = cloud.points[i];
-    if (surfaceDistance(surfaces[t], p) > eps) return cap;
-    const PointFit fit = pointFit(surfaces[t], p, cloud.normals[i], scales);
-    if (fit.cosine < result.normalThreshold || (scales.normal > 0.0 && fit.normal2 > kNormalChi2)) {
-      return cap;
-    }
-    return std::pow(fit.distance / scales.position, 2) + fit.normal2;
+    return explainScore(cloud, result, surfaces[t], i, scales, cap);
   };
   // The scores of every inlier on its own surface and on every other surface
   // that explains it (below the cap), computed once in parallel over the
@@ -337,23 +357,12 @@ std::size_t mergeDuplicateSurfaces(const PointCloud& cloud, DetectionResult& res
   if (!cloud.hasNormals()) {
     throw std::invalid_argument("mergeDuplicateSurfaces needs one normal per point");
   }
-  const double eps = result.epsilon;
   // By distance and the cosine threshold alone: the fits at a bore's mouth
   // take the normals of the blended edge, which the normal noise measured
   // inside the faces would call a tilt.
   FitScales scales = fitScales(result, options);
   scales.normal = 0.0;
-  const double cap = std::pow(eps / scales.position, 2) + kNormalChi2;
-  // removeRedundant's score of point i on surface t, by distance.
-  const auto score = [&](const Surface& t, std::uint32_t i) {
-    const Vec3& p = cloud.points[i];
-    if (surfaceDistance(t, p) > eps) return cap;
-    const PointFit fit = pointFit(t, p, cloud.normals[i], scales);
-    if (fit.cosine < result.normalThreshold || (scales.normal > 0.0 && fit.normal2 > kNormalChi2)) {
-      return cap;
-    }
-    return std::pow(fit.distance / scales.position, 2) + fit.normal2;
-  };
+  const double cap = std::pow(result.epsilon / scales.position, 2) + kNormalChi2;
   // Smallest first: a surface goes into the one of its type and convexity
   // that explains most of its points (the larger on a tie), when that one
   // explains them about as well as it does.
@@ -363,33 +372,36 @@ std::size_t mergeDuplicateSurfaces(const PointCloud& cloud, DetectionResult& res
     return surfaces[a].inliers.size() < surfaces[b].inliers.size();
   });
   std::vector<char> alive(surfaces.size(), 1);
+  std::vector<double> self;
   std::size_t merged = 0;
   for (std::size_t b : order) {
     Surface& from = surfaces[b];
     if (from.type() == SurfaceType::Plane || from.inliers.empty()) continue;
+    self.clear();
+    for (std::uint32_t i : from.inliers) {
+      self.push_back(explainScore(cloud, result, from, i, scales, cap));
+    }
     const double n = double(from.inliers.size());
-    int into = -1;
-    std::size_t bestExplained = 0;
+    std::size_t into = surfaces.size(), bestExplained = 0;
     for (std::size_t a = 0; a < surfaces.size(); ++a) {
       const Surface& to = surfaces[a];
       if (a == b || !alive[a] || to.type() != from.type() || to.convex != from.convex) continue;
       std::size_t explained = 0;
       double sum = 0.0;
-      for (std::uint32_t i : from.inliers) {
-        const double other = score(to, i);
+      for (std::size_t k = 0; k < from.inliers.size(); ++k) {
+        const double other = explainScore(cloud, result, to, from.inliers[k], scales, cap);
         explained += other < cap;
-        sum += score(from, i) - other;
+        sum += self[k] - other;
       }
-      if (double(explained) >= options.redundantFraction * n && sum / n >= -0.5 &&
-          (explained > bestExplained ||
-           (explained == bestExplained &&
-            to.inliers.size() > surfaces[std::size_t(into)].inliers.size()))) {
-        into = int(a);
+      if (double(explained) < options.redundantFraction * n || sum / n < -0.5) continue;
+      if (explained > bestExplained ||
+          (explained == bestExplained && to.inliers.size() > surfaces[into].inliers.size())) {
+        into = a;
         bestExplained = explained;
       }
     }
-    if (into < 0) continue;
-    Surface& to = surfaces[std::size_t(into)];
+    if (into == surfaces.size()) continue;
+    Surface& to = surfaces[into];
     to.inliers.insert(to.inliers.end(), from.inliers.begin(), from.inliers.end());
     std::sort(to.inliers.begin(), to.inliers.end());
     to.rms = rmsDistance(cloud, to.inliers, to);
@@ -403,17 +415,7 @@ std::size_t mergeDuplicateSurfaces(const PointCloud& cloud, DetectionResult& res
     if (alive[s]) kept.push_back(std::move(surfaces[s]));
   }
   surfaces = std::move(kept);
-  result.centroids.assign(surfaces.size(), Vec3::Zero());
-  std::fill(result.assignment.begin(), result.assignment.end(), -1);
-  for (std::size_t s = 0; s < surfaces.size(); ++s) {
-    Vec3 sum = Vec3::Zero();
-    for (std::uint32_t i : surfaces[s].inliers) {
-      sum += cloud.points[i];
-      result.assignment[i] = int(s);
-    }
-    if (!surfaces[s].inliers.empty())
-      result.centroids[s] = sum / double(surfaces[s].inliers.size());
-  }
+  indexInliers(cloud, result);
   sortBySize(result);
   return merged;
 }
@@ -441,19 +443,9 @@ void fitSurfaces(const PointCloud& cloud, DetectionResult& result, const Surface
                    options.connectedPatches, options.normalNoiseTest);
     fitAll(cloud, result, options, fits);
   }
-  // Final bookkeeping: rms and centroids on the final inliers.
-  result.centroids.assign(result.surfaces.size(), Vec3::Zero());
-  for (std::size_t s = 0; s < result.surfaces.size(); ++s) {
-    Surface& surf = result.surfaces[s];
-    Vec3 sum = Vec3::Zero();
-    for (std::uint32_t i : surf.inliers) sum += cloud.points[i];
-    if (!surf.inliers.empty()) result.centroids[s] = sum / double(surf.inliers.size());
-    surf.rms = rmsDistance(cloud, surf.inliers, surf);
-  }
-  std::fill(result.assignment.begin(), result.assignment.end(), -1);
-  for (std::size_t s = 0; s < result.surfaces.size(); ++s) {
-    for (std::uint32_t i : result.surfaces[s].inliers) result.assignment[i] = int(s);
-  }
+  // Final bookkeeping: rms, centroids and the assignment on the final inliers.
+  for (Surface& surf : result.surfaces) surf.rms = rmsDistance(cloud, surf.inliers, surf);
+  indexInliers(cloud, result);
   sortBySize(result);
   if (result.surfaces.empty() && result.status == DetectionResult::Status::Ok) {
     result.status = DetectionResult::Status::NoSurfaces;

@@ -502,6 +502,19 @@ DetectionResult oneSurface(const PointCloud& cloud, Surface s, double diag, doub
   return result;
 }
 
+// `count` points of the face through `origin` with normal frame column 0,
+// spanning [u0, u1] along column 1 and [v0, v1] along column 2.
+PointCloud facePatch(Rng& rng, const Mat3& frame, const Vec3& origin, double u0, double u1,
+                     double v0, double v1, int count) {
+  PointCloud cloud;
+  for (int i = 0; i < count; ++i) {
+    const double u = uniform(rng, u0, u1), v = uniform(rng, v0, v1);
+    cloud.points.push_back(origin + u * frame.col(1) + v * frame.col(2));
+    cloud.normals.push_back(frame.col(0));
+  }
+  return cloud;
+}
+
 // A lug's flat side that detection took as a wide cylinder (together with a
 // strip of the round next to it) is a plane once only its own points are
 // left: the refinement gives the plane, not a cylinder of radius far beyond
@@ -510,12 +523,7 @@ TEST(SurfaceFit, ACylinderFlattenedIntoAPlaneBecomesThePlane) {
   Rng rng(11);
   const Mat3 frame = randomRotation(rng);
   const Vec3 normal = frame.col(0), offsetPoint = Vec3(1, 2, 3) + 0.83 * normal;
-  PointCloud cloud;
-  for (int i = 0; i < 600; ++i) {
-    const double u = uniform(rng, 0.0, 3.0), v = uniform(rng, -1.5, 1.5);
-    cloud.points.push_back(offsetPoint + u * frame.col(1) + v * frame.col(2));
-    cloud.normals.push_back(normal);
-  }
+  PointCloud cloud = facePatch(rng, frame, offsetPoint, 0.0, 3.0, -1.5, 1.5, 600);
   Surface wide;
   // Radius 4, bent away from the points' plane by up to 0.28 at the patch ends.
   wide.shape = CylinderSurface{offsetPoint - 4.0 * normal + 1.5 * frame.col(1), frame.col(2), 4.0};
@@ -573,12 +581,7 @@ TEST(SurfaceFit, AConeFarFromItsApexBecomesThePlane) {
   Rng rng(17);
   const Mat3 frame = randomRotation(rng);
   const Vec3 normal = frame.col(0), offsetPoint = Vec3(-1, 0.5, 2) + 0.4 * normal;
-  PointCloud cloud;
-  for (int i = 0; i < 600; ++i) {
-    const double u = uniform(rng, -1.5, 1.5), v = uniform(rng, -1.5, 1.5);
-    cloud.points.push_back(offsetPoint + u * frame.col(1) + v * frame.col(2));
-    cloud.normals.push_back(normal);
-  }
+  const PointCloud cloud = facePatch(rng, frame, offsetPoint, -1.5, 1.5, -1.5, 1.5, 600);
   std::vector<std::uint32_t> all(cloud.size());
   for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
   // A cone of half-angle 16 degrees around an axis in the face, its apex
@@ -618,6 +621,16 @@ TEST(SurfaceFit, AConeFarFromItsApexBecomesThePlane) {
   EXPECT_EQ(round.surfaces[0].inliers.size(), bore.size());
 }
 
+// Adds `second` to a result whose one surface holds every point, with the
+// inliers of the first from index `keep` on.
+void splitInto(DetectionResult& result, Surface second, std::size_t keep) {
+  std::vector<std::uint32_t>& first = result.surfaces[0].inliers;
+  second.inliers.assign(first.begin() + std::ptrdiff_t(keep), first.end());
+  first.resize(keep);
+  for (std::uint32_t i : second.inliers) result.assignment[i] = 1;
+  result.surfaces.push_back(std::move(second));
+}
+
 // Two fits of one bore's mouth, one of them tilted 3.6 degrees (past the
 // regularisation's 3), explain each other's points: they become one
 // surface, the larger fit's, with every point. Two coaxial bands whose radii
@@ -641,12 +654,8 @@ TEST(SurfaceFit, DuplicateFitsOfOneSurfaceMerge) {
       cloud, bore(std::cos(tilt) * frame.col(2) + std::sin(tilt) * frame.col(0), 15.0), 130.0, eps);
   result.noise = sigma;
   result.normalNoise = 0.02;
-  result.surfaces.push_back(bore(frame.col(2), 15.0));
   // The tilted fit holds 220 of the points, the coaxial one 180.
-  Surface& tilted = result.surfaces[0];
-  result.surfaces[1].inliers.assign(tilted.inliers.begin() + 220, tilted.inliers.end());
-  tilted.inliers.resize(220);
-  for (std::uint32_t i : result.surfaces[1].inliers) result.assignment[i] = 1;
+  splitInto(result, bore(frame.col(2), 15.0), 220);
   EXPECT_EQ(mergeDuplicateSurfaces(cloud, result), 1u);
   ASSERT_EQ(result.surfaces.size(), 1u);
   EXPECT_EQ(result.surfaces[0].inliers.size(), cloud.size());
@@ -663,23 +672,18 @@ TEST(SurfaceFit, DuplicateFitsOfOneSurfaceMerge) {
   DetectionResult two = oneSurface(stepped, bore(frame.col(2), 15.0), 130.0, eps);
   two.noise = sigma;
   two.normalNoise = 0.02;
-  two.surfaces.push_back(bore(frame.col(2), 15.4));
-  two.surfaces[1].inliers.assign(two.surfaces[0].inliers.begin() + 200,
-                                 two.surfaces[0].inliers.end());
-  two.surfaces[0].inliers.resize(200);
-  for (std::uint32_t i : two.surfaces[1].inliers) two.assignment[i] = 1;
+  splitInto(two, bore(frame.col(2), 15.4), 200);
   EXPECT_EQ(mergeDuplicateSurfaces(stepped, two), 0u);
   EXPECT_EQ(two.surfaces.size(), 2u);
 
-  // A boss of the bore's size (convex) is another surface.
+  // A boss of the bore's size faces the other way: its points are not the
+  // bore's, nor the bore's its.
   DetectionResult mixed = result;
-  mixed.surfaces.push_back(bore(frame.col(2), 15.0));
-  mixed.surfaces[1].convex = true;
-  mixed.surfaces[1].inliers.assign(mixed.surfaces[0].inliers.begin() + 200,
-                                   mixed.surfaces[0].inliers.end());
-  mixed.surfaces[0].inliers.resize(200);
-  for (std::uint32_t i : mixed.surfaces[1].inliers) mixed.assignment[i] = 1;
+  Surface boss = bore(frame.col(2), 15.0);
+  boss.convex = true;
+  splitInto(mixed, boss, 200);
   EXPECT_EQ(mergeDuplicateSurfaces(cloud, mixed), 0u);
+  EXPECT_EQ(mixed.surfaces.size(), 2u);
 }
 
 // Points on a tessellated hole along `axis` (frame column 2): a prism of
