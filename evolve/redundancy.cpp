@@ -291,6 +291,154 @@ bool differOnLess(const CsgTree& a, const CsgTree& b, const Aabb& box, double sp
   return true;
 }
 
+// A primitive whose solid holds a's and b's and no more than both where they
+// join (see withSharedCuts), or nullopt. Lengths agree within `tolerance`.
+std::optional<Primitive> spanningPrimitive(const Primitive& a, const Primitive& b,
+                                           double tolerance) {
+  if (!a.isBounded() || a.type() != b.type()) return std::nullopt;
+  if (a.approxEqual(b, tolerance)) return a;
+  if (const auto* p = a.as<Cylinder>()) {
+    const Cylinder& q = *b.as<Cylinder>();
+    if (std::abs(p->radius - q.radius) > tolerance) return std::nullopt;
+    // q's axis segment on p's axis line: both ends within the tolerance of it.
+    double lo = -0.5 * p->height, hi = 0.5 * p->height;
+    for (const double end : {-0.5, 0.5}) {
+      const Vec3 e = q.center + end * q.height * q.axis - p->center;
+      const double t = e.dot(p->axis);
+      if ((e - t * p->axis).norm() > tolerance) return std::nullopt;
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+    }
+    return Cylinder{p->center + 0.5 * (lo + hi) * p->axis, p->axis, p->radius, hi - lo};
+  }
+  if (const auto* p = a.as<Box>()) {
+    const Box& q = *b.as<Box>();
+    // q's extent along each of p's axes (its support, larger if q is turned).
+    Vec3 lo, hi;
+    int apart = -1;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 axis = p->axes.col(k);
+      const double c = (q.center - p->center).dot(axis);
+      const double e = (q.axes.transpose() * axis).cwiseAbs().dot(q.halfSize);
+      const bool agree = std::abs(c - e + p->halfSize[k]) <= tolerance &&
+                         std::abs(c + e - p->halfSize[k]) <= tolerance;
+      if (!agree) {
+        if (apart >= 0) return std::nullopt;
+        apart = k;
+      }
+      lo[k] = std::min(-p->halfSize[k], c - e);
+      hi[k] = std::max(p->halfSize[k], c + e);
+    }
+    if (apart < 0) return a;
+    Vec3 half = p->halfSize;
+    half[apart] = 0.5 * (hi[apart] - lo[apart]);
+    return Box{p->center + p->axes.col(apart) * (0.5 * (lo[apart] + hi[apart])), p->axes, half};
+  }
+  return std::nullopt;
+}
+
+// The difference `member` without its cutter k (its first operand alone when
+// no other cutter is left).
+NodePtr withoutCutter(const NodePtr& member, std::size_t k) {
+  std::vector<NodePtr> rest = member->children;
+  rest.erase(rest.begin() + std::ptrdiff_t(k));
+  return rest.size() == 1 ? rest.front()
+                          : std::make_shared<const Node>(NodeKind::Difference, std::move(rest));
+}
+
+// The union or difference at `path` with two of its leaf operands (members,
+// or cutters) that one primitive spans made that primitive, the first such
+// change of the solid by less than minVolume; nullopt if none.
+std::optional<CsgTree> joinOneSurface(const CsgTree& tree, const NodePath& path, double spacing,
+                                      double minVolume) {
+  const NodePtr& node = tree.nodeAt(path);
+  const std::vector<NodePtr>& operands = node->children;
+  for (std::size_t i = node->kind == NodeKind::Difference ? 1 : 0; i < operands.size(); ++i) {
+    if (operands[i]->kind != NodeKind::Primitive) continue;
+    for (std::size_t j = i + 1; j < operands.size(); ++j) {
+      if (operands[j]->kind != NodeKind::Primitive) continue;
+      const std::optional<Primitive> span =
+          spanningPrimitive(operands[i]->primitive, operands[j]->primitive, 0.25 * spacing);
+      if (!span) continue;
+      std::vector<NodePtr> rest = operands;
+      rest[i] = std::make_shared<const Node>(*span, operands[i]->name);
+      rest.erase(rest.begin() + std::ptrdiff_t(j));
+      const CsgTree variant = tree.replaceSubtree(
+          path,
+          CsgTree(rest.size() == 1 ? rest.front()
+                                   : std::make_shared<const Node>(node->kind, std::move(rest))));
+      if (differOnLess(tree, variant, span->bounds(), spacing, minVolume)) return variant;
+    }
+  }
+  return std::nullopt;
+}
+
+// The union at `path` with one cut shared by two of its members, the first
+// such rewrite that changes the solid by less than minVolume; nullopt if none.
+std::optional<CsgTree> shareOneCut(const CsgTree& tree, const NodePath& path, double spacing,
+                                   double minVolume) {
+  const NodePtr& node = tree.nodeAt(path);
+  const std::vector<NodePtr>& members = node->children;
+  const auto cutters = [](const NodePtr& m) {
+    return m->kind == NodeKind::Difference ? m->children.size() : std::size_t{0};
+  };
+  const Aabb unionBox = CsgTree(node).bounds();
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    for (std::size_t j = i + 1; j < members.size(); ++j) {
+      for (std::size_t ci = 1; ci < cutters(members[i]); ++ci) {
+        const Node& first = *members[i]->children[ci];
+        if (first.kind != NodeKind::Primitive) continue;
+        for (std::size_t cj = 1; cj < cutters(members[j]); ++cj) {
+          const Node& second = *members[j]->children[cj];
+          if (second.kind != NodeKind::Primitive) continue;
+          const std::optional<Primitive> span =
+              spanningPrimitive(first.primitive, second.primitive, 0.25 * spacing);
+          if (!span) continue;
+          const NodePtr cut = std::make_shared<const Node>(*span, first.name);
+          const NodePtr a = withoutCutter(members[i], ci), b = withoutCutter(members[j], cj);
+          const Aabb box = span->bounds().intersected(unionBox);
+          // Every member cut, then only the two.
+          std::vector<NodePtr> all = members;
+          all[i] = a;
+          all[j] = b;
+          std::vector<NodePtr> others;
+          for (std::size_t k = 0; k < members.size(); ++k)
+            if (k != i && k != j) others.push_back(members[k]);
+          const auto cutFrom = [&cut](std::vector<NodePtr> operands) {
+            return std::make_shared<const Node>(
+                NodeKind::Difference,
+                std::vector<NodePtr>{
+                    std::make_shared<const Node>(NodeKind::Union, std::move(operands)), cut});
+          };
+          std::vector<NodePtr> variants{cutFrom(all)};
+          if (!others.empty()) {
+            others.push_back(cutFrom({a, b}));
+            variants.push_back(std::make_shared<const Node>(NodeKind::Union, std::move(others)));
+          }
+          for (const NodePtr& v : variants) {
+            CsgTree variant = tree.replaceSubtree(path, CsgTree(v));
+            // A union cut from something else: the new cut joins its cutters.
+            if (v == variants.front() && !path.empty() && path.back() == 0) {
+              const NodePath parentPath(path.begin(), path.end() - 1);
+              const NodePtr& parent = tree.nodeAt(parentPath);
+              if (parent->kind == NodeKind::Difference) {
+                std::vector<NodePtr> operands = v->children;
+                operands.insert(operands.end(), parent->children.begin() + 1,
+                                parent->children.end());
+                variant = tree.replaceSubtree(
+                    parentPath, CsgTree(std::make_shared<const Node>(NodeKind::Difference,
+                                                                     std::move(operands))));
+              }
+            }
+            if (differOnLess(tree, variant, box, spacing, minVolume)) return variant;
+          }
+        }
+      }
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 CsgTree withoutNegligibleOperands(const CsgTree& tree, double spacing, double minVolume) {
@@ -312,6 +460,27 @@ CsgTree withoutNegligibleOperands(const CsgTree& tree, double spacing, double mi
         }
       }
       if (removed) break;
+    }
+  }
+  return current;
+}
+
+CsgTree withSharedCuts(const CsgTree& tree, double spacing, double minVolume) {
+  if (tree.empty() || !(spacing > 0.0) || !(minVolume > 0.0)) return tree;
+  CsgTree current = tree;
+  for (bool shared = true; shared;) {
+    shared = false;
+    for (const NodePath& path : nodePaths(current)) {
+      const NodeKind kind = current.nodeAt(path)->kind;
+      if (kind != NodeKind::Union && kind != NodeKind::Difference) continue;
+      std::optional<CsgTree> variant = joinOneSurface(current, path, spacing, minVolume);
+      if (!variant && kind == NodeKind::Union)
+        variant = shareOneCut(current, path, spacing, minVolume);
+      if (variant) {
+        current = std::move(*variant);
+        shared = true;
+        break;
+      }
     }
   }
   return current;

@@ -45,6 +45,25 @@ CsgTree withoutEmptySubtrees(const CsgTree& tree);
 /// it cuts). Deterministic.
 CsgTree withoutNegligibleOperands(const CsgTree& tree, double spacing, double minVolume);
 
+/// The tree with each surface that two of its leaves share made one leaf, at
+/// a union or a difference (depth-first, the first rewrite kept, then the
+/// search starts again), in two ways:
+///  - two leaf operands (members, or cutters) that one primitive C spans
+///    become C;
+///  - a surface cut out of two members of a union is cut once, out of the
+///    union: union(A − C1, B − C2, …) becomes union(A, B, …) − C, or, where
+///    the other members must keep what C would take, union(union(A, B) − C, …).
+/// C spans leaves C1 and C2 when they are equal primitives (C is the first),
+/// coaxial cylinders of one radius (C covers both lengths), or boxes of one
+/// frame whose extents agree along two of its axes (C covers both along the
+/// third); "agree" within a quarter of `spacing`. A rewrite is kept when the
+/// solid changes by less than `minVolume` over C's box, counted as
+/// withoutNegligibleOperands counts it. One primitive fewer per rewrite: a
+/// bore cut from a flange and again from its hub, each to its own depth,
+/// becomes one bore, and so does a bore cut as two lengths of it.
+/// Deterministic.
+CsgTree withSharedCuts(const CsgTree& tree, double spacing, double minVolume);
+
 /// withoutEmptySubtrees and normalizeTree, then, repeatedly, the first operation node (in
 /// depth-first order) that can be replaced by one of its operands, or lose an operand, with a
 /// fitness at least as high, is; until none can. The result's fitness is never lower than that of

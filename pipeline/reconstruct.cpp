@@ -331,11 +331,15 @@ Reconstruction afterDetection(Reconstruction out, SurfacesAndCandidates found,
   // points, so a member that only grazes the rest (a corner of a box where
   // another member's cylinder meets it), or a cut that only grazes what it
   // cuts, can stay: an operand that changes less than a voxel's volume of
-  // the solid goes. The genetic baseline's tree is left as its search gave it.
+  // the solid goes. A surface cut from two members of a union, each to its
+  // own depth (a bore through a flange and again through its hub), is then
+  // cut once from both where that too changes less than a voxel's volume.
+  // The genetic baseline's tree is left as its search gave it.
   if (options.method != Method::Gp && !out.tree.empty() && !control.cancelled()) {
     const double h = out.grid.voxelSize();
-    const CsgTree kept =
-        withoutNegligibleOperands(withoutEmptySubtrees(out.tree), 0.5 * h, h * h * h);
+    const CsgTree kept = withSharedCuts(
+        withoutNegligibleOperands(withoutEmptySubtrees(out.tree), 0.5 * h, h * h * h), 0.5 * h,
+        h * h * h);
     if (kept.primitiveCount() != out.tree.primitiveCount()) {
       out.tree = kept;
       out.voxels = solidVoxels(out.tree, out.grid);

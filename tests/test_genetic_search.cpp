@@ -295,6 +295,86 @@ TEST(Redundancy, OperandsThatChangeLessThanTheVolumeGiven) {
   EXPECT_EQ(withoutNegligibleOperands(clipped, 0.5 * h, h * h * h).root(), clipped.root());
 }
 
+// Points of a lattice of `step` over `box` where the two trees' solids differ.
+std::size_t solidsDiffer(const CsgTree& a, const CsgTree& b, const Aabb& box, double step) {
+  std::vector<Vec3> points;
+  for (double x = box.min.x(); x <= box.max.x(); x += step)
+    for (double y = box.min.y(); y <= box.max.y(); y += step)
+      for (double z = box.min.z(); z <= box.max.z(); z += step) points.emplace_back(x, y, z);
+  std::vector<double> va(points.size()), vb(points.size());
+  a.values(points, va);
+  b.values(points, vb);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) n += (va[i] >= 0.0) != (vb[i] >= 0.0);
+  return n;
+}
+
+// bearing_housing's scanner scan gave its bore twice: cut from the flange to
+// the top, and again from the hub to z = 8, one cylinder of one radius on
+// one axis. A flange and the hub standing on it, each with its part of a
+// bore: one bore, cut from both; a cross pin through the bore keeps its
+// middle (the bore cuts the two members only); a union that is itself cut
+// takes the bore among its cutters. Not merged: a bore of another radius,
+// a bore off the axis.
+TEST(Redundancy, ACutOfOneSurfaceInTwoMembersIsMadeOnce) {
+  const auto cylinder = [](double z0, double z1, double r, double x = 0.0) {
+    return CsgTree::leaf(Cylinder{Vec3(x, 0, 0.5 * (z0 + z1)), Vec3::UnitZ(), r, z1 - z0}, "c");
+  };
+  const CsgTree flange = cylinder(0, 2, 4), hub = cylinder(2, 6, 2);
+  const CsgTree low = cylinder(-0.1, 2.1, 1), high = cylinder(1.9, 6.1, 1);
+  const double h = 0.1;  // a voxel
+  const Aabb box{Vec3(-4.5, -4.5, -0.5), Vec3(4.5, 4.5, 6.5)};
+  const CsgTree twice =
+      CsgTree::unite({CsgTree::subtract({flange, low}), CsgTree::subtract({hub, high})});
+  const CsgTree once = withSharedCuts(twice, 0.5 * h, h * h * h);
+  const CsgTree bore = cylinder(-0.1, 6.1, 1);
+  EXPECT_TRUE(
+      once.structurallyEqual(CsgTree::subtract({CsgTree::unite({flange, hub}), bore}), 1e-12))
+      << once.primitiveCount();
+  EXPECT_EQ(solidsDiffer(twice, once, box, 0.1), 0u);
+  // The pin across the bore stays whole.
+  const CsgTree pin = CsgTree::leaf(Box{Vec3(0, 0, 5), Mat3::Identity(), Vec3(3, 0.3, 0.3)});
+  const CsgTree pinned =
+      CsgTree::unite({CsgTree::subtract({flange, low}), CsgTree::subtract({hub, high}), pin});
+  const CsgTree sharedPinned = withSharedCuts(pinned, 0.5 * h, h * h * h);
+  EXPECT_TRUE(sharedPinned.structurallyEqual(
+      CsgTree::unite({pin, CsgTree::subtract({CsgTree::unite({flange, hub}), bore})}), 1e-12))
+      << sharedPinned.primitiveCount();
+  EXPECT_EQ(solidsDiffer(pinned, sharedPinned, box, 0.1), 0u);
+  // A cut union: the bore joins its cutters.
+  const CsgTree ball = CsgTree::leaf(Sphere{Vec3(0, 0, 7), 1.5});
+  const CsgTree cut = withSharedCuts(CsgTree::subtract({twice, ball}), 0.5 * h, h * h * h);
+  EXPECT_TRUE(
+      cut.structurallyEqual(CsgTree::subtract({CsgTree::unite({flange, hub}), bore, ball}), 1e-12))
+      << cut.primitiveCount();
+  // Slots of one width and length through a plate and the block on it: one slot.
+  const auto box3 = [](Vec3 lo, Vec3 hi) {
+    return CsgTree::leaf(Box{0.5 * (lo + hi), Mat3::Identity(), 0.5 * (hi - lo)});
+  };
+  const CsgTree slots =
+      CsgTree::unite({CsgTree::subtract({box3(Vec3(-4, -4, 0), Vec3(4, 4, 1)),
+                                         box3(Vec3(-1, -3, -0.1), Vec3(1, 3, 1.1))}),
+                      CsgTree::subtract({box3(Vec3(-2, -4, 1), Vec3(2, 4, 3)),
+                                         box3(Vec3(-1, -3, 0.9), Vec3(1, 3, 3.1))})});
+  const CsgTree slot = withSharedCuts(slots, 0.5 * h, h * h * h);
+  EXPECT_EQ(slot.primitiveCount(), 3u);
+  EXPECT_EQ(solidsDiffer(slots, slot, box, 0.1), 0u);
+  // Two lengths of one bore cut from one block, two halves of one shaft
+  // joined: one cylinder each.
+  const CsgTree block = box3(Vec3(-3, -3, 0), Vec3(3, 3, 6));
+  const CsgTree halves = CsgTree::subtract({block, low, high});
+  EXPECT_TRUE(withSharedCuts(halves, 0.5 * h, h * h * h)
+                  .structurallyEqual(CsgTree::subtract({block, bore}), 1e-12));
+  const CsgTree shaft = CsgTree::unite({low, high});
+  EXPECT_TRUE(withSharedCuts(shaft, 0.5 * h, h * h * h).structurallyEqual(bore, 1e-12));
+  // Another radius, another axis: kept as they were.
+  for (const CsgTree& other : {cylinder(1.9, 6.1, 1.2), cylinder(1.9, 6.1, 1, 0.5)}) {
+    const CsgTree t =
+        CsgTree::unite({CsgTree::subtract({flange, low}), CsgTree::subtract({hub, other})});
+    EXPECT_EQ(withSharedCuts(t, 0.5 * h, h * h * h).root(), t.root());
+  }
+}
+
 // The tree of a scanned plate of bosses (data/regressions): its subtree
 // difference(cylinder9, halfspace5) is empty, the cylinder (radius 214.8,
 // reaching x = 489 beside a part 150 wide) lying under the plane. It goes,
